@@ -1,0 +1,1 @@
+"""Subcommands of the ``fuzzrisk`` command line (see :mod:`monitor.cli`)."""
