@@ -1,0 +1,255 @@
+"""YAML rule bases: a strict safe reader and a readable writer.
+
+Schema (every key but ``inputs``, ``outputs`` and ``rules`` is optional)::
+
+    name: fuzzrisk
+    description: free text
+    type: mamdani                  # or sugeno
+    and: min                       # min | prod
+    or: max                        # max | probor
+    implication: min               # min | prod            (Mamdani)
+    aggregation: max               # max | sum | probor    (Mamdani)
+    defuzzifier: centroid          # centroid | centroid_exact | bisector | mom | som | lom
+                                   # (Mamdani); wtaver | wtsum (Sugeno)
+    resolution: 101                # output grid points, both ends included (MATLAB: 101)
+    no_rule_fired: midpoint        # midpoint | nan | a number
+    metadata: {...}                # free provenance, kept on save/load
+    inputs:
+      iou:
+        range: [0, 1]
+        terms:
+          low: [trapmf, 0, 0, 0.2, 0.4]     # [kind, parameters...] in MATLAB's order
+    outputs:
+      risk: {range: [0, 1], terms: {...}}
+    rules:
+      - if rdd is high then risk is high
+      - rule: if rdd is low and iou is high then risk is low
+        weight: 0.5
+
+Reading uses YAML's safe loader only (a tag that would construct an object is refused),
+refuses duplicate keys and unknown keys, and reports errors with the file, the line and
+the YAML path of the offending entry.
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .errors import RuleBaseError
+from .rules import format_rule, parse_rule
+from .system import FuzzySystem
+from .variables import Term, Variable
+
+_SETTINGS = {
+    "and": "and_method", "or": "or_method", "implication": "implication",
+    "aggregation": "aggregation", "defuzzifier": "defuzzifier", "resolution": "resolution",
+    "no_rule_fired": "no_rule_fired", "type": "type", "name": "name", "description": "description",
+}
+_TOP_KEYS = set(_SETTINGS) | {"inputs", "outputs", "rules", "metadata"}
+
+
+class _Map(dict):
+    """A mapping that remembers the line of each key (1-based)."""
+
+    line: int = 0
+    key_lines: dict
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """Safe loading, plus: duplicate keys are errors, mappings remember their lines."""
+
+    def construct_yaml_map(self, node):
+        data = _Map()
+        data.line = node.start_mark.line + 1
+        data.key_lines = {}
+        yield data
+        self.flatten_mapping(node)
+        for key_node, value_node in node.value:
+            key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            if key in data.key_lines:
+                raise RuleBaseError(f"duplicate key {key!r} (first at line {data.key_lines[key]})",
+                                    place=f"line {line}")
+            data.key_lines[key] = line
+            data[key] = self.construct_object(value_node, deep=True)
+
+
+_StrictLoader.add_constructor("tag:yaml.org,2002:map", _StrictLoader.construct_yaml_map)
+
+
+class _Reader:
+    def __init__(self, source: str | None):
+        self.source = source
+
+    def error(self, message: str, path: str, where: Any = None, key: Any = None) -> RuleBaseError:
+        line = None
+        if isinstance(where, _Map):
+            line = where.key_lines.get(key, where.line) if key is not None else where.line
+        place = f"line {line}, {path}" if line else path
+        return RuleBaseError(message, source=self.source, place=place)
+
+    def mapping(self, value: Any, path: str, allowed: set[str], required: set[str] = frozenset(),
+                parent: Any = None, key: Any = None) -> _Map:
+        if not isinstance(value, dict):
+            raise self.error(f"expected a mapping, got {type(value).__name__} {value!r}", path, parent, key)
+        unknown = sorted(str(k) for k in value if k not in allowed)
+        if unknown:
+            raise self.error(f"unknown key(s) {', '.join(unknown)}; expected {', '.join(sorted(allowed))}",
+                             path, value, unknown[0])
+        missing = sorted(required - set(value))
+        if missing:
+            raise self.error(f"missing key(s) {', '.join(missing)}", path, value)
+        return value
+
+    def number(self, value: Any, path: str, parent: Any, key: Any) -> float:
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+            raise self.error(f"{value!r} is not a finite number", path, parent, key)
+        return float(value)
+
+    def variable(self, name: Any, spec: Any, path: str, parent: _Map) -> Variable:
+        spec = self.mapping(spec, path, {"range", "terms"}, {"range", "terms"}, parent, name)
+        rng = spec["range"]
+        if not isinstance(rng, list) or len(rng) != 2:
+            raise self.error(f"range {rng!r}: expected [lo, hi]", f"{path}.range", spec, "range")
+        lo, hi = (self.number(v, f"{path}.range", spec, "range") for v in rng)
+        terms = spec["terms"]
+        if not isinstance(terms, dict) or not terms:
+            raise self.error("terms: expected a non-empty mapping of name: [kind, parameters...]",
+                             f"{path}.terms", spec, "terms")
+        built = []
+        for term_name, term_spec in terms.items():
+            tpath = f"{path}.terms.{term_name}"
+            if not isinstance(term_spec, list) or not term_spec or not isinstance(term_spec[0], str):
+                raise self.error(f"{term_spec!r}: expected [kind, parameters...], e.g. [trimf, 0, 0.5, 1]",
+                                 tpath, terms, term_name)
+            params = [self.number(v, tpath, terms, term_name) for v in term_spec[1:]]
+            try:
+                built.append(Term(term_name, term_spec[0], params))
+            except (RuleBaseError, ValueError) as exc:
+                raise self.error(getattr(exc, "detail", str(exc)), tpath, terms, term_name) from None
+        try:
+            return Variable(name, (lo, hi), tuple(built))
+        except RuleBaseError as exc:
+            raise self.error(exc.detail, path, parent, name) from None
+
+    def variables(self, data: _Map, key: str) -> tuple[Variable, ...]:
+        spec = data[key]
+        if not isinstance(spec, dict) or not spec:
+            raise self.error(f"expected a non-empty mapping of variable name: {{range, terms}}", key, data, key)
+        return tuple(self.variable(name, value, f"{key}.{name}", spec) for name, value in spec.items())
+
+    def system(self, data: Any) -> FuzzySystem:
+        if data is None:
+            raise self.error("the file is empty; expected a rule base mapping", "top level")
+        data = self.mapping(data, "top level", _TOP_KEYS, {"inputs", "outputs", "rules"})
+        inputs, outputs = self.variables(data, "inputs"), self.variables(data, "outputs")
+        rules_spec = data["rules"]
+        if not isinstance(rules_spec, list) or not rules_spec:
+            raise self.error("expected a non-empty list of rules", "rules", data, "rules")
+        rules = []
+        for r, item in enumerate(rules_spec):
+            path = f"rules[{r}]"
+            weight = 1.0
+            if isinstance(item, dict):
+                self.mapping(item, path, {"rule", "weight"}, {"rule"})
+                weight = self.number(item.get("weight", 1.0), f"{path}.weight", item, "weight")
+                text = item["rule"]
+            else:
+                text = item
+            try:
+                rules.append(parse_rule(text, inputs, outputs, weight))
+            except RuleBaseError as exc:
+                raise self.error(exc.detail, path, data, "rules") from None
+        settings = {attr: data[key] for key, attr in _SETTINGS.items() if key in data}
+        settings.setdefault("name", Path(self.source).stem if self.source else "fuzzy-system")
+        if "metadata" in data:
+            settings["metadata"] = self.mapping(data["metadata"], "metadata", set(data["metadata"] or {}),
+                                                parent=data, key="metadata")
+        if settings.get("type") == "sugeno":
+            settings.setdefault("defuzzifier", "wtaver")
+        try:
+            return FuzzySystem(inputs=inputs, outputs=outputs, rules=tuple(rules), **settings)
+        except RuleBaseError as exc:
+            key = (exc.place or "").split(".")[0].split("[")[0]
+            key = {v: k for k, v in _SETTINGS.items()}.get(key, key)
+            raise self.error(exc.detail, exc.place or "top level", data, key if key in data else None) from None
+
+
+def loads(text: str, source: str | None = None) -> FuzzySystem:
+    """Read a rule base from YAML text; ``source`` names it in error messages."""
+    try:
+        data = yaml.load(text, Loader=_StrictLoader)
+    except RuleBaseError as exc:
+        raise RuleBaseError(exc.detail, source=source, place=exc.place) from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        place = f"line {mark.line + 1}" if mark else None
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise RuleBaseError(f"not valid safe YAML: {problem}", source=source, place=place) from None
+    return _Reader(source).system(data)
+
+
+def read(path: str | Path) -> FuzzySystem:
+    """Read a YAML rule base file."""
+    path = Path(path)
+    return loads(path.read_text(encoding="utf-8"), source=str(path))
+
+
+def _scalar(value: Any) -> str:
+    """One YAML scalar, quoted only where YAML needs it (names like ``no`` or ``on``)."""
+    text = yaml.safe_dump(value, width=10**9, allow_unicode=True)
+    return text[: -len("\n...\n")] if text.endswith("\n...\n") else text.rstrip("\n")
+
+
+def _variable_lines(var: Variable) -> list[str]:
+    names = [t.name for t in var.terms]
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise RuleBaseError(f"variable {var.name!r} has repeated term names ({', '.join(repeated)}); "
+                            "YAML rule bases name terms uniquely: rename them first")
+    lines = [f"  {_scalar(var.name)}:", f"    range: [{_scalar(var.range[0])}, {_scalar(var.range[1])}]",
+             "    terms:"]
+    for term in var.terms:
+        params = ", ".join(_scalar(p) for p in term.params)
+        lines.append(f"      {_scalar(term.name)}: [{term.kind}, {params}]")
+    return lines
+
+
+def dumps(system: FuzzySystem) -> str:
+    """The YAML text of ``system``; :func:`loads` reads it back equal."""
+    lines = ["# fuzzy rule base (fuzzcore YAML; see fuzzcore/yaml_format.py for the schema)"]
+    lines.append(f"name: {_scalar(system.name)}")
+    if system.description:
+        lines.append(f"description: {_scalar(system.description)}")
+    lines.append(f"type: {system.type}")
+    lines.append(f"and: {system.and_method}")
+    lines.append(f"or: {system.or_method}")
+    lines.append(f"implication: {system.implication}")
+    lines.append(f"aggregation: {system.aggregation}")
+    lines.append(f"defuzzifier: {system.defuzzifier}")
+    lines.append(f"resolution: {system.resolution}")
+    lines.append(f"no_rule_fired: {_scalar(system.no_rule_fired)}")
+    for key, variables in (("inputs", system.inputs), ("outputs", system.outputs)):
+        lines.append(f"{key}:")
+        for var in variables:
+            lines += _variable_lines(var)
+    lines.append("rules:")
+    for rule in system.rules:
+        text = _scalar(format_rule(rule, system.inputs, system.outputs))
+        if rule.weight == 1.0:
+            lines.append(f"  - {text}")
+        else:
+            lines += [f"  - rule: {text}", f"    weight: {_scalar(rule.weight)}"]
+    if system.metadata:
+        block = yaml.safe_dump({"metadata": system.metadata}, sort_keys=False, width=10**9)
+        lines += block.rstrip("\n").split("\n")
+    return "\n".join(lines) + "\n"
+
+
+def write(system: FuzzySystem, path: str | Path) -> None:
+    """Write ``system`` as a YAML rule base."""
+    Path(path).write_text(dumps(system), encoding="utf-8")

@@ -1,0 +1,117 @@
+"""Hypothesis strategies: random valid terms and fuzzy systems, built without filtering."""
+from __future__ import annotations
+
+from hypothesis import strategies as st
+
+from fuzzcore import FuzzySystem, Rule, Term, Variable
+
+INPUT_KINDS = ("trimf", "trapmf", "gaussmf", "gauss2mf", "gbellmf", "sigmf", "dsigmf", "psigmf",
+               "smf", "zmf", "pimf", "linsmf", "linzmf")
+PIECEWISE = ("trimf", "trapmf", "linsmf", "linzmf")
+
+_coord = st.floats(-1.0, 1.0, allow_nan=False, width=64)
+_width = st.floats(0.05, 1.0, allow_nan=False)
+
+
+@st.composite
+def term_params(draw, kind: str, lo: float = -1.0, hi: float = 1.0):
+    """Valid parameters of ``kind`` with features inside [lo, hi] (sorted draws, no filter)."""
+    span = hi - lo
+
+    def points(n):
+        return sorted(draw(st.lists(st.floats(lo, hi), min_size=n, max_size=n)))
+
+    if kind in ("trimf", "pimf", "trapmf", "smf", "zmf", "linsmf", "linzmf"):
+        n = {"trimf": 3, "trapmf": 4, "pimf": 4}.get(kind, 2)
+        return points(n)
+    if kind == "gaussmf":
+        return [draw(_width) * span, draw(st.floats(lo, hi))]
+    if kind == "gauss2mf":
+        c1, c2 = points(2)
+        return [draw(_width) * span, c1, draw(_width) * span, c2]
+    if kind == "gbellmf":
+        return [draw(_width) * span, draw(st.floats(0.5, 4.0)), draw(st.floats(lo, hi))]
+    slope = st.floats(-20.0, 20.0).map(lambda a: a / span)
+    if kind == "sigmf":
+        return [draw(slope), draw(st.floats(lo, hi))]
+    return [draw(slope), draw(st.floats(lo, hi)), draw(slope), draw(st.floats(lo, hi))]
+
+
+@st.composite
+def variables(draw, name: str, kinds=INPUT_KINDS, min_terms=1, max_terms=4):
+    lo = draw(st.floats(-2.0, 0.0))
+    hi = lo + draw(st.floats(0.5, 3.0))
+    n = draw(st.integers(min_terms, max_terms))
+    terms = []
+    for k in range(n):
+        kind = draw(st.sampled_from(kinds))
+        terms.append(Term(f"t{k}", kind, draw(term_params(kind, lo, hi))))
+    return Variable(name, (lo, hi), tuple(terms))
+
+
+@st.composite
+def mamdani_systems(draw, kinds=INPUT_KINDS, output_kinds=INPUT_KINDS, defuzzifiers=None,
+                    aggregations=("max", "sum", "probor"), max_inputs=3, max_outputs=2):
+    n_in = draw(st.integers(1, max_inputs))
+    n_out = draw(st.integers(1, max_outputs))
+    inputs = [draw(variables(f"x{i}", kinds)) for i in range(n_in)]
+    outputs = [draw(variables(f"y{o}", output_kinds)) for o in range(n_out)]
+    rules = []
+    for _ in range(draw(st.integers(1, 8))):
+        ante = [draw(st.integers(-len(v.terms), len(v.terms))) for v in inputs]
+        cons = [draw(st.integers(1, len(v.terms))) * draw(st.sampled_from((1, 1, 1, -1))) for v in outputs]
+        rules.append(Rule(tuple(ante), tuple(cons), draw(st.sampled_from((1.0, 0.5, 0.25))),
+                          draw(st.sampled_from(("and", "or")))))
+    return FuzzySystem(
+        name="random", inputs=tuple(inputs), outputs=tuple(outputs), rules=tuple(rules),
+        and_method=draw(st.sampled_from(("min", "prod"))),
+        or_method=draw(st.sampled_from(("max", "probor"))),
+        implication=draw(st.sampled_from(("min", "prod"))),
+        aggregation=draw(st.sampled_from(aggregations)),
+        defuzzifier=draw(st.sampled_from(defuzzifiers or ("centroid", "bisector", "mom", "som", "lom"))),
+        resolution=draw(st.sampled_from((101, 101, 11, 257))),
+        no_rule_fired=draw(_policies(outputs)),
+    )
+
+
+def _policies(outputs):
+    lo, hi = max(v.range[0] for v in outputs), min(v.range[1] for v in outputs)
+    numbers = [st.floats(lo, hi)] if lo <= hi else []
+    return st.one_of(st.sampled_from(("midpoint", "nan")), *numbers)
+
+
+@st.composite
+def sugeno_systems(draw, max_inputs=3):
+    n_in = draw(st.integers(1, max_inputs))
+    inputs = [draw(variables(f"x{i}")) for i in range(n_in)]
+    terms = []
+    for k in range(draw(st.integers(1, 4))):
+        if draw(st.booleans()):
+            terms.append(Term(f"c{k}", "constant", [draw(_coord)]))
+        else:
+            terms.append(Term(f"l{k}", "linear", draw(st.lists(_coord, min_size=n_in + 1, max_size=n_in + 1))))
+    output = Variable("z", (-3.0, 3.0), tuple(terms))
+    rules = []
+    for _ in range(draw(st.integers(1, 6))):
+        ante = [draw(st.integers(-len(v.terms), len(v.terms))) for v in inputs]
+        rules.append(Rule(tuple(ante), (draw(st.integers(1, len(terms))),), draw(st.sampled_from((1.0, 0.5))),
+                          draw(st.sampled_from(("and", "or")))))
+    return FuzzySystem(
+        name="random_sugeno", type="sugeno", inputs=tuple(inputs), outputs=(output,), rules=tuple(rules),
+        and_method=draw(st.sampled_from(("min", "prod"))), or_method=draw(st.sampled_from(("max", "probor"))),
+        defuzzifier=draw(st.sampled_from(("wtaver", "wtsum"))),
+        no_rule_fired=draw(_policies((output,))),
+    )
+
+
+def samples(system, n: int, draw):
+    """``n`` input rows spread a little beyond each input's range."""
+    rows = []
+    for _ in range(n):
+        row = []
+        for v in system.inputs:
+            lo, hi = v.range
+            pad = 0.1 * (hi - lo)
+            row.append(draw(st.floats(lo - pad, hi + pad)))
+        rows.append(row)
+    return rows
