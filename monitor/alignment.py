@@ -1,0 +1,171 @@
+"""Alignment of one frame: safety-critical objects S against the detector's predictions P.
+
+FuzzRisk, Sec. III-A ("Measuring alignment with object detector predictions"): the
+Hungarian algorithm pairs S with P on the distance between box centres; each pair gets
+IoU and RDD; a pair counts only when ``IoU > alpha`` and ``|RDD| < beta``; an S without a
+counted pair scores IoU = 0 and RDD = 1; the frame's features are the means over S,
+IoU~ and RDD~.
+
+A frame without safety-critical objects (empty S) has no features: its means are NaN and
+its :attr:`Alignment.status` is :data:`NO_OBJECTS`. The caller must check the status; the
+NaN is there so that forgetting to cannot produce a confident number.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from monitor import _box_kernels as _k
+from monitor.boxes import as_boxes
+
+#: :attr:`Alignment.status` of a frame with at least one safety-critical object.
+OK = "ok"
+#: :attr:`Alignment.status` of a frame with no safety-critical object: features undefined.
+NO_OBJECTS = "no-objects"
+
+#: The paper's matching thresholds (Table I, second row).
+DEFAULT_ALPHA = 0.3
+DEFAULT_BETA = 0.2
+
+
+@dataclass(frozen=True, eq=False)
+class Alignment:
+    """The alignment of one frame: a per-S table and the frame features.
+
+    Attributes
+    ----------
+    partner : ndarray of shape (M,), int64
+        Row of P the Hungarian assignment gave to each row of S; -1 when it gave none
+        (only when S has more rows than P).
+    pair_iou : ndarray of shape (M,), float64
+        IoU of each S with its partner (0 where ``partner == -1``).
+    pair_rdd : ndarray of shape (M,), float64
+        RDD of each S with its partner, ``min(1, (d_P - d_S) / d_S)`` (1 where
+        ``partner == -1``).
+    matched : ndarray of shape (M,), bool
+        The partner counts: ``pair_iou > alpha`` and ``|pair_rdd| < beta``.
+    iou_mean : float
+        IoU~, the mean over S of :attr:`iou`; NaN when S is empty.
+    rdd_mean : float
+        RDD~, the mean over S of :attr:`rdd`; NaN when S is empty.
+    alpha, beta : float
+        The thresholds used.
+    """
+
+    partner: np.ndarray
+    pair_iou: np.ndarray
+    pair_rdd: np.ndarray
+    matched: np.ndarray
+    iou_mean: float
+    rdd_mean: float
+    alpha: float
+    beta: float
+
+    @property
+    def n_objects(self) -> int:
+        """M, the number of safety-critical objects."""
+        return self.partner.shape[0]
+
+    @property
+    def status(self) -> str:
+        """:data:`OK`, or :data:`NO_OBJECTS` when S is empty (the means are then NaN)."""
+        return OK if self.n_objects else NO_OBJECTS
+
+    @property
+    def iou(self) -> np.ndarray:
+        """(M,) per-S IoU score: ``pair_iou`` where matched, else 0."""
+        return np.where(self.matched, self.pair_iou, 0.0)
+
+    @property
+    def rdd(self) -> np.ndarray:
+        """(M,) per-S RDD score: ``pair_rdd`` where matched, else 1."""
+        return np.where(self.matched, self.pair_rdd, 1.0)
+
+
+def _assign(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    partner = np.full(a.shape[0], -1, dtype=np.int64)
+    rows, cols = linear_sum_assignment(_k.centre_distances(a, b))
+    partner[rows] = cols
+    return partner
+
+
+def assign_by_centre(a, b) -> np.ndarray:
+    """Hungarian assignment of the rows of ``a`` to the rows of ``b`` on centre distance.
+
+    Minimises the summed Euclidean distance between paired box centres
+    (``scipy.optimize.linear_sum_assignment``); ``min(n, m)`` pairs are formed.
+
+    Parameters
+    ----------
+    a : array_like of shape (n, 5)
+    b : array_like of shape (m, 5)
+        Box arrays, rows ``cx, cy, w, h, d``.
+
+    Returns
+    -------
+    ndarray of shape (n,), int64
+        The row of ``b`` paired with each row of ``a``, -1 for a row left without one.
+    """
+    return _assign(as_boxes(a, "a"), as_boxes(b, "b"))
+
+
+def _check_thresholds(alpha, beta) -> tuple[float, float]:
+    alpha, beta = float(alpha), float(beta)
+    if not 0.0 <= alpha <= 1.0:
+        raise ValueError(f"alpha = {alpha!r}, expected an IoU threshold in [0, 1]")
+    if not 0.0 < beta < np.inf:
+        raise ValueError(f"beta = {beta!r}, expected a finite |RDD| threshold > 0")
+    return alpha, beta
+
+
+def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Alignment:
+    """Align the safety-critical objects of one frame with the predictions.
+
+    Parameters
+    ----------
+    S : array_like of shape (M, 5)
+        Safety-critical objects, rows ``cx, cy, w, h, d``; ``d > 0`` metres (RDD divides
+        by it).
+    P : array_like of shape (N, 5)
+        Predictions, rows ``cx, cy, w, h, d``; ``d >= 0`` metres.
+    alpha : float
+        A pair counts only when its IoU is ``> alpha``; in ``[0, 1]``.
+    beta : float
+        A pair counts only when ``|RDD| < beta``; ``> 0``.
+
+    Returns
+    -------
+    Alignment
+        ``iou_mean`` and ``rdd_mean`` are IoU~ and RDD~. Empty S gives status
+        :data:`NO_OBJECTS` and NaN means; empty P gives every S IoU 0 and RDD 1.
+
+    Raises
+    ------
+    ValueError
+        Invalid boxes (message names ``S`` or ``P``, the row and column) or thresholds.
+    """
+    alpha, beta = _check_thresholds(alpha, beta)
+    S = as_boxes(S, "S", positive_depth=True)
+    P = as_boxes(P, "P")
+    partner = _assign(S, P)
+    m = S.shape[0]
+    pair_iou = np.empty(m)
+    pair_rdd = np.empty(m)
+    matched = np.empty(m, dtype=np.bool_)
+    iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
+    if m == 0:
+        iou_mean = rdd_mean = float("nan")
+    else:
+        iou_mean, rdd_mean = iou_sum / m, rdd_sum / m
+    return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta)
+
+
+def warm_up() -> None:
+    """Compile (or load from the cache) every kernel :func:`align` uses.
+
+    Call once before a real-time loop so that its first frame does not pay the compile.
+    """
+    S = np.array([[10.0, 10.0, 4.0, 4.0, 5.0], [30.0, 10.0, 4.0, 4.0, 8.0]])
+    align(S, S[:1])
