@@ -44,6 +44,7 @@ class Variable:
     """An input or output variable: a name, a range ``(lo, hi)`` and its terms, in order.
 
     Rules refer to terms by their position (1-based, as in MATLAB), so term order matters.
+    An input may have no terms (MATLAB allows it; no rule can then use it); an output may not.
     """
 
     name: str
@@ -57,8 +58,6 @@ class Variable:
             raise RuleBaseError(f"range [{lo}, {hi}] of {self.name!r}: expected finite lo < hi")
         object.__setattr__(self, "range", (lo, hi))
         object.__setattr__(self, "terms", tuple(self.terms))
-        if not self.terms:
-            raise RuleBaseError(f"variable {self.name!r} has no terms; expected at least one")
 
     def term_index(self, name: str) -> int:
         """1-based position of the term called ``name`` (the first, if names repeat)."""
@@ -69,6 +68,8 @@ class Variable:
 
     def check_terms(self, n_inputs: int, is_input: bool) -> None:
         """Validate every term's kind and parameters for this variable's role."""
+        if not is_input and not self.terms:
+            raise RuleBaseError(f"output {self.name!r} has no terms; expected at least one")
         for term in self.terms:
             kind = resolve_kind(term.kind)
             if is_input and kind.output_only:

@@ -117,8 +117,8 @@ class _Reader:
             raise self.error(f"range {rng!r}: expected [lo, hi]", f"{path}.range", spec, "range")
         lo, hi = (self.number(v, f"{path}.range", spec, "range") for v in rng)
         terms = spec["terms"]
-        if not isinstance(terms, dict) or not terms:
-            raise self.error("terms: expected a non-empty mapping of name: [kind, parameters...]",
+        if not isinstance(terms, dict):
+            raise self.error("terms: expected a mapping of name: [kind, parameters...]",
                              f"{path}.terms", spec, "terms")
         built = []
         for term_name, term_spec in terms.items():
