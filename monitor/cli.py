@@ -12,6 +12,9 @@ import sys
 #: subcommand name -> module implementing it (see the module docstring for the protocol)
 COMMANDS = {
     "infer": "monitor.commands.infer",
+    "demo": "monitor.commands.demo",
+    "prior": "monitor.commands.prior",
+    "convert": "monitor.commands.convert",
 }
 
 
