@@ -90,6 +90,9 @@ class FuzzySystem:
         for name in ("inputs", "outputs", "rules"):
             object.__setattr__(self, name, tuple(getattr(self, name)))
         object.__setattr__(self, "metadata", dict(self.metadata))
+        for name in ("name", "description"):
+            if not isinstance(getattr(self, name), str):
+                raise RuleBaseError(f"{name} {getattr(self, name)!r} must be text", place=name)
         _choice(self.type, SYSTEMS, "type")
         _choice(self.and_method, AND_METHODS, "and")
         _choice(self.or_method, OR_METHODS, "or")

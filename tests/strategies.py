@@ -51,14 +51,15 @@ def variables(draw, name: str, kinds=INPUT_KINDS, min_terms=1, max_terms=4):
 
 @st.composite
 def mamdani_systems(draw, kinds=INPUT_KINDS, output_kinds=INPUT_KINDS, defuzzifiers=None,
-                    aggregations=("max", "sum", "probor"), max_inputs=3, max_outputs=2):
+                    aggregations=("max", "sum", "probor"), max_inputs=3, max_outputs=2, textual=False):
+    """Random valid Mamdani systems; ``textual``: every rule has a text form (some input used)."""
     n_in = draw(st.integers(1, max_inputs))
     n_out = draw(st.integers(1, max_outputs))
     inputs = [draw(variables(f"x{i}", kinds)) for i in range(n_in)]
     outputs = [draw(variables(f"y{o}", output_kinds)) for o in range(n_out)]
     rules = []
     for _ in range(draw(st.integers(1, 8))):
-        ante = [draw(st.integers(-len(v.terms), len(v.terms))) for v in inputs]
+        ante = _antecedent(draw, inputs, textual)
         cons = [draw(st.integers(1, len(v.terms))) * draw(st.sampled_from((1, 1, 1, -1))) for v in outputs]
         rules.append(Rule(tuple(ante), tuple(cons), draw(st.sampled_from((1.0, 0.5, 0.25))),
                           draw(st.sampled_from(("and", "or")))))
@@ -74,6 +75,13 @@ def mamdani_systems(draw, kinds=INPUT_KINDS, output_kinds=INPUT_KINDS, defuzzifi
     )
 
 
+def _antecedent(draw, inputs, textual):
+    ante = [draw(st.integers(-len(v.terms), len(v.terms))) for v in inputs]
+    if textual and not any(ante):
+        ante[0] = draw(st.integers(1, len(inputs[0].terms)))
+    return ante
+
+
 def _policies(outputs):
     lo, hi = max(v.range[0] for v in outputs), min(v.range[1] for v in outputs)
     numbers = [st.floats(lo, hi)] if lo <= hi else []
@@ -81,7 +89,7 @@ def _policies(outputs):
 
 
 @st.composite
-def sugeno_systems(draw, max_inputs=3):
+def sugeno_systems(draw, max_inputs=3, textual=False):
     n_in = draw(st.integers(1, max_inputs))
     inputs = [draw(variables(f"x{i}")) for i in range(n_in)]
     terms = []
@@ -93,7 +101,7 @@ def sugeno_systems(draw, max_inputs=3):
     output = Variable("z", (-3.0, 3.0), tuple(terms))
     rules = []
     for _ in range(draw(st.integers(1, 6))):
-        ante = [draw(st.integers(-len(v.terms), len(v.terms))) for v in inputs]
+        ante = _antecedent(draw, inputs, textual)
         rules.append(Rule(tuple(ante), (draw(st.integers(1, len(terms))),), draw(st.sampled_from((1.0, 0.5))),
                           draw(st.sampled_from(("and", "or")))))
     return FuzzySystem(
