@@ -13,6 +13,8 @@ import sys
 COMMANDS = {
     "infer": "monitor.commands.infer",
     "demo": "monitor.commands.demo",
+    "eval": "monitor.commands.eval",
+    "features": "monitor.commands.features",
     "prior": "monitor.commands.prior",
     "convert": "monitor.commands.convert",
 }

@@ -9,6 +9,8 @@ usable in rule text are renamed with a warning.
 from __future__ import annotations
 
 import argparse
+import sys
+import warnings
 from pathlib import Path
 
 import fuzzcore
@@ -25,7 +27,11 @@ def run(args: argparse.Namespace) -> int:
     source, target = Path(args.input), Path(args.output)
     if target.exists() and source.exists() and target.resolve() == source.resolve():
         raise ValueError(f"{target}: OUT is the same file as IN; write to another file")
-    system = fuzzcore.load(source)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        system = fuzzcore.load(source)
+    for warning in caught:  # e.g. a .fis name renamed to be usable in rule text
+        print(f"fuzzrisk convert: warning: {warning.message}", file=sys.stderr)
     fuzzcore.save(system, target)
     print(f"{source} -> {target}: {system.type} system {system.name!r}, {len(system.inputs)} input(s), "
           f"{len(system.outputs)} output(s), {len(system.rules)} rule(s)")

@@ -29,6 +29,7 @@ from monitor.figures_retrieval import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
+from monitor.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
 
 HELP = "run the monitor on built-in synthetic scenes and write reports and figures"
@@ -70,17 +71,6 @@ _COLUMNS = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("ok",
             ("no_objects", "no-obj", "{}"), ("invalid", "invalid", "{}"), ("mean_risk", "risk", "{:.2f}"),
             ("shield_on", "shield", "{:.0%}"), ("mean_target", "1-USC~", "{:.2f}"), ("rmse", "RMSE", "{:.3f}"),
             ("recall_s", "rec S", "{:.2f}"), ("recall_p", "rec P", "{:.2f}"), ("ms_per_frame", "ms/frame", "{:.1f}")]
-
-
-def format_table(table: list[dict], markdown: bool) -> str:
-    """The summary as aligned text or a Markdown table."""
-    head = [h for _, h, _ in _COLUMNS]
-    body = [[fmt.format(row[key]) for key, _, fmt in _COLUMNS] for row in table]
-    if markdown:
-        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in body])
-    widths = [max(len(x) for x in col) for col in zip(head, *body)]
-    return "\n".join("  ".join(x.rjust(w) for x, w in zip(r, widths)) for r in [head] + body)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -139,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     elapsed = time.perf_counter() - started
     print(SYNTHETIC_NOTE)
     print(f"rule base: {rules_path} ({fis.name}); shield threshold {config.shield.threshold}")
-    print(format_table(table, markdown=False))
+    print(format_table(table, _COLUMNS))
     (out / "report.md").write_text(_report(table, rules_path, fis, bench, config, figures, elapsed),
                                    encoding="utf-8")
     print(f"{len(rows)} frames in {elapsed:.1f} s; reports and figures in {out}/")
@@ -160,7 +150,7 @@ def _report(table, rules_path, fis, bench, config, figures, elapsed) -> str:
         "risk: mean monitor risk; shield: share of frames with the shield engaged; 1-USC~: the ground-truth "
         "target; RMSE: the rule base against it on frames with features; rec S / rec P: recall of the ground "
         "truth by the depth view / the detector (IoU > 0.3, |RDD| < 0.2).", "",
-        format_table(table, markdown=True), "",
+        format_table(table, _COLUMNS, markdown=True), "",
         "## Figures", "",
     ]
     for name in figures:
