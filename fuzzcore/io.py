@@ -4,13 +4,17 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Callable
 
-from . import yaml_format
+from . import fis_format, yaml_format
 from .system import FuzzySystem
 
 #: extension -> reader(path) -> FuzzySystem
-READERS: dict[str, Callable[[Path], FuzzySystem]] = {".yaml": yaml_format.read, ".yml": yaml_format.read}
+READERS: dict[str, Callable[[Path], FuzzySystem]] = {
+    ".yaml": yaml_format.read, ".yml": yaml_format.read, ".fis": fis_format.read,
+}
 #: extension -> writer(system, path)
-WRITERS: dict[str, Callable[[FuzzySystem, Path], None]] = {".yaml": yaml_format.write, ".yml": yaml_format.write}
+WRITERS: dict[str, Callable[[FuzzySystem, Path], None]] = {
+    ".yaml": yaml_format.write, ".yml": yaml_format.write, ".fis": fis_format.write,
+}
 
 
 def _format(path: Path, table: dict) -> Callable:

@@ -9,14 +9,14 @@ from .errors import RuleBaseError
 from .membership import check_params, resolve_kind
 
 #: names usable in rule text: a letter or underscore, then letters, digits, ``_``, ``-`` or ``.``
-NAME_PATTERN = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
 #: words of the rule language, which cannot be names
 RESERVED = frozenset({"if", "then", "is", "not", "and", "or"})
 
 
 def check_name(name: object, what: str) -> str:
     """Return ``name`` if usable in rule text, else raise :class:`RuleBaseError` saying why."""
-    if not isinstance(name, str) or not NAME_PATTERN.match(name) or name in RESERVED:
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or name in RESERVED:
         raise RuleBaseError(
             f"{what} name {name!r} is not usable in rules: expected a letter or '_' then letters, "
             f"digits, '_', '-' or '.', and not one of {sorted(RESERVED)}"

@@ -25,6 +25,9 @@ Schema (every key but ``inputs``, ``outputs`` and ``rules`` is optional)::
       - if rdd is high then risk is high
       - rule: if rdd is low and iou is high then risk is low
         weight: 0.5
+      - rule: if rdd is high then risk is high
+        connective: or             # one-clause rules only: the connective MATLAB keeps
+                                   # (``: 2`` in a .fis rule line); it does not change the result
 
 Reading uses YAML's safe loader only (a tag that would construct an object is refused),
 refuses duplicate keys and unknown keys, and reports errors with the file, the line and
@@ -34,13 +37,14 @@ from __future__ import annotations
 
 import math
 import numbers
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
 from .errors import RuleBaseError
-from .rules import format_rule, parse_rule
+from .rules import CONNECTIVES, Rule, format_rule, parse_rule
 from .system import FuzzySystem
 from .variables import Term, Variable
 
@@ -136,6 +140,15 @@ class _Reader:
         except RuleBaseError as exc:
             raise self.error(exc.detail, path, parent, name) from None
 
+    def connective(self, rule: Rule, value: Any, path: str, item: _Map) -> Rule:
+        """``rule`` with the connective an explicit ``connective:`` key gives a one-clause rule."""
+        if value not in CONNECTIVES:
+            raise self.error(f"connective {value!r}: expected 'and' or 'or'", path, item, "connective")
+        if sum(1 for index in rule.antecedent if index) > 1:
+            raise self.error("connective is for one-clause rules only; this rule's text already joins its "
+                             f"clauses with {rule.connective!r}", path, item, "connective")
+        return replace(rule, connective=value)
+
     def variables(self, data: _Map, key: str) -> tuple[Variable, ...]:
         spec = data[key]
         if not isinstance(spec, dict) or not spec:
@@ -153,22 +166,26 @@ class _Reader:
         rules = []
         for r, item in enumerate(rules_spec):
             path = f"rules[{r}]"
-            weight = 1.0
+            weight, connective = 1.0, None
             if isinstance(item, dict):
-                self.mapping(item, path, {"rule", "weight"}, {"rule"})
+                self.mapping(item, path, {"rule", "weight", "connective"}, {"rule"})
                 weight = self.number(item.get("weight", 1.0), f"{path}.weight", item, "weight")
                 text = item["rule"]
+                connective = item.get("connective")
             else:
                 text = item
             try:
-                rules.append(parse_rule(text, inputs, outputs, weight))
+                rule = parse_rule(text, inputs, outputs, weight)
             except RuleBaseError as exc:
                 raise self.error(exc.detail, path, data, "rules") from None
+            if connective is not None:
+                rule = self.connective(rule, connective, f"{path}.connective", item)
+            rules.append(rule)
         settings = {attr: data[key] for key, attr in _SETTINGS.items() if key in data}
         settings.setdefault("name", Path(self.source).stem if self.source else "fuzzy-system")
         if "metadata" in data:
-            settings["metadata"] = self.mapping(data["metadata"], "metadata", set(data["metadata"] or {}),
-                                                parent=data, key="metadata")
+            settings["metadata"] = _plain(self.mapping(data["metadata"], "metadata", set(data["metadata"] or {}),
+                                                       parent=data, key="metadata"))
         if settings.get("type") == "sugeno":
             settings.setdefault("defuzzifier", "wtaver")
         try:
@@ -179,10 +196,10 @@ class _Reader:
             raise self.error(exc.detail, exc.place or "top level", data, key if key in data else None) from None
 
 
-def loads(text: str, source: str | None = None) -> FuzzySystem:
-    """Read a rule base from YAML text; ``source`` names it in error messages."""
+def _parse(text: str, source: str | None) -> Any:
+    """Strict safe YAML (mappings as :class:`_Map`); any failure is a :class:`RuleBaseError`."""
     try:
-        data = yaml.load(text, Loader=_StrictLoader)
+        return yaml.load(text, Loader=_StrictLoader)
     except RuleBaseError as exc:
         raise RuleBaseError(exc.detail, source=source, place=exc.place) from None
     except yaml.YAMLError as exc:
@@ -190,7 +207,41 @@ def loads(text: str, source: str | None = None) -> FuzzySystem:
         place = f"line {mark.line + 1}" if mark else None
         problem = getattr(exc, "problem", None) or str(exc)
         raise RuleBaseError(f"not valid safe YAML: {problem}", source=source, place=place) from None
-    return _Reader(source).system(data)
+    except (ValueError, TypeError, AttributeError) as exc:  # PyYAML's constructors: a bad date, !!int x, ...
+        raise RuleBaseError(f"not valid safe YAML: {exc}", source=source) from None
+
+
+def _plain(data: Any) -> Any:
+    """``data`` with every :class:`_Map` turned into a plain dict (which YAML can dump again).
+
+    Containers that YAML aliases share stay shared, so nested aliases cannot blow up into
+    exponentially many copies (the strict loader already refuses recursive ones).
+    """
+    done: dict[int, Any] = {}
+
+    def convert(value: Any) -> Any:
+        if not isinstance(value, (dict, list)):
+            return value
+        if id(value) not in done:
+            done[id(value)] = ({k: convert(v) for k, v in value.items()} if isinstance(value, dict)
+                               else [convert(v) for v in value])
+        return done[id(value)]
+
+    return convert(data)
+
+
+def load_data(text: str, source: str | None = None) -> Any:
+    """Plain Python data from YAML text, read as rule bases are (safe, duplicate keys refused).
+
+    For YAML carried inside other files (the ``%fuzzcore:`` lines of a ``.fis`` file).
+    Errors are :class:`RuleBaseError` naming ``source`` and the line.
+    """
+    return _plain(_parse(text, source))
+
+
+def loads(text: str, source: str | None = None) -> FuzzySystem:
+    """Read a rule base from YAML text; ``source`` names it in error messages."""
+    return _Reader(source).system(_parse(text, source))
 
 
 def read(path: str | Path) -> FuzzySystem:
@@ -201,7 +252,9 @@ def read(path: str | Path) -> FuzzySystem:
 
 def _scalar(value: Any) -> str:
     """One YAML scalar, quoted only where YAML needs it (names like ``no`` or ``on``)."""
-    text = yaml.safe_dump(value, width=10**9, allow_unicode=True)
+    # ASCII with escapes: with allow_unicode, line-break characters such as U+0085 are written
+    # raw and read back as spaces
+    text = yaml.safe_dump(value, width=10**9, allow_unicode=False)
     return text[: -len("\n...\n")] if text.endswith("\n...\n") else text.rstrip("\n")
 
 
@@ -212,7 +265,7 @@ def _variable_lines(var: Variable) -> list[str]:
         raise RuleBaseError(f"variable {var.name!r} has repeated term names ({', '.join(repeated)}); "
                             "YAML rule bases name terms uniquely: rename them first")
     lines = [f"  {_scalar(var.name)}:", f"    range: [{_scalar(var.range[0])}, {_scalar(var.range[1])}]",
-             "    terms:"]
+             "    terms:" if var.terms else "    terms: {}"]  # an input may have no terms
     for term in var.terms:
         params = ", ".join(_scalar(p) for p in term.params)
         lines.append(f"      {_scalar(term.name)}: [{term.kind}, {params}]")
@@ -238,18 +291,36 @@ def dumps(system: FuzzySystem) -> str:
         for var in variables:
             lines += _variable_lines(var)
     lines.append("rules:")
-    for rule in system.rules:
-        text = _scalar(format_rule(rule, system.inputs, system.outputs))
-        if rule.weight == 1.0:
+    for r, rule in enumerate(system.rules):
+        try:
+            text = _scalar(format_rule(rule, system.inputs, system.outputs))
+        except RuleBaseError as exc:
+            raise RuleBaseError(f"rule {r + 1} (antecedent {list(rule.antecedent)}): {exc.detail}; YAML rules "
+                                "need at least one condition", place=f"rules[{r}]") from None
+        # a one-clause rule keeps the connective its text cannot show (MATLAB stores one per rule)
+        one_clause_or = rule.connective == "or" and sum(1 for index in rule.antecedent if index) == 1
+        if rule.weight == 1.0 and not one_clause_or:
             lines.append(f"  - {text}")
         else:
-            lines += [f"  - rule: {text}", f"    weight: {_scalar(rule.weight)}"]
+            lines.append(f"  - rule: {text}")
+            if rule.weight != 1.0:
+                lines.append(f"    weight: {_scalar(rule.weight)}")
+            if one_clause_or:
+                lines.append("    connective: or")
     if system.metadata:
-        block = yaml.safe_dump({"metadata": system.metadata}, sort_keys=False, width=10**9)
+        try:
+            block = yaml.safe_dump({"metadata": system.metadata}, sort_keys=False, width=10**9)
+        except yaml.YAMLError as exc:
+            raise RuleBaseError(f"metadata holds a value YAML cannot write ({exc}); use plain numbers, "
+                                "text, lists and mappings", place="metadata") from None
         lines += block.rstrip("\n").split("\n")
     return "\n".join(lines) + "\n"
 
 
 def write(system: FuzzySystem, path: str | Path) -> None:
     """Write ``system`` as a YAML rule base."""
-    Path(path).write_text(dumps(system), encoding="utf-8")
+    try:
+        text = dumps(system)
+    except RuleBaseError as exc:
+        raise RuleBaseError(exc.detail, source=str(path), place=exc.place) from None
+    Path(path).write_text(text, encoding="utf-8")
