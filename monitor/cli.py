@@ -15,6 +15,7 @@ COMMANDS = {
     "demo": "monitor.commands.demo",
     "eval": "monitor.commands.eval",
     "features": "monitor.commands.features",
+    "simulate": "monitor.commands.simulate",
     "prior": "monitor.commands.prior",
     "convert": "monitor.commands.convert",
 }
