@@ -572,11 +572,3 @@ def dumps(system: FuzzySystem) -> str:
                      f"({_number_text(rule.weight)}) : {1 if rule.connective == 'and' else 2}")
     return "\n".join(lines) + "\n"
 
-
-def write(system: FuzzySystem, path: str | Path) -> None:
-    """Write ``system`` as a MATLAB ``.fis`` file (UTF-8)."""
-    try:
-        text = dumps(system)
-    except RuleBaseError as exc:
-        raise RuleBaseError(exc.detail, source=str(path), place=exc.place) from None
-    Path(path).write_text(text, encoding="utf-8")

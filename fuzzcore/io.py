@@ -5,15 +5,16 @@ from pathlib import Path
 from typing import Callable
 
 from . import fis_format, yaml_format
+from .errors import RuleBaseError
 from .system import FuzzySystem
 
 #: extension -> reader(path) -> FuzzySystem
 READERS: dict[str, Callable[[Path], FuzzySystem]] = {
     ".yaml": yaml_format.read, ".yml": yaml_format.read, ".fis": fis_format.read,
 }
-#: extension -> writer(system, path)
-WRITERS: dict[str, Callable[[FuzzySystem, Path], None]] = {
-    ".yaml": yaml_format.write, ".yml": yaml_format.write, ".fis": fis_format.write,
+#: extension -> dumps(system) -> the file's text
+WRITERS: dict[str, Callable[[FuzzySystem], str]] = {
+    ".yaml": yaml_format.dumps, ".yml": yaml_format.dumps, ".fis": fis_format.dumps,
 }
 
 
@@ -35,6 +36,14 @@ def load(path: str | Path) -> FuzzySystem:
 
 
 def save(system: FuzzySystem, path: str | Path) -> None:
-    """Write ``system`` to ``path`` in the format its extension names."""
+    """Write ``system`` to ``path`` (UTF-8) in the format its extension names.
+
+    A system the format cannot hold raises :class:`RuleBaseError` naming the file.
+    """
     path = Path(path)
-    _format(path, WRITERS)(system, path)
+    dumps = _format(path, WRITERS)
+    try:
+        text = dumps(system)
+    except RuleBaseError as exc:
+        raise RuleBaseError(exc.detail, source=str(path), place=exc.place) from None
+    path.write_text(text, encoding="utf-8")

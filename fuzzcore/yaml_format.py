@@ -316,11 +316,3 @@ def dumps(system: FuzzySystem) -> str:
         lines += block.rstrip("\n").split("\n")
     return "\n".join(lines) + "\n"
 
-
-def write(system: FuzzySystem, path: str | Path) -> None:
-    """Write ``system`` as a YAML rule base."""
-    try:
-        text = dumps(system)
-    except RuleBaseError as exc:
-        raise RuleBaseError(exc.detail, source=str(path), place=exc.place) from None
-    Path(path).write_text(text, encoding="utf-8")

@@ -247,7 +247,7 @@ def test_repeated_term_names_bind_by_index(tmp_path):
     assert system.infer(0.0, 4.0) == 5.0
     assert fis_format.loads(fis_format.dumps(system)) == system
     with pytest.raises(RuleBaseError, match=r"variable 'z' has repeated term names \(c\)") as info:
-        yaml_format.write(system, tmp_path / "out.yaml")
+        fuzzcore.save(system, tmp_path / "out.yaml")
     assert info.value.source == str(tmp_path / "out.yaml")
     assert not (tmp_path / "out.yaml").exists()
 
@@ -425,7 +425,7 @@ def test_rule_without_condition_reads_but_cannot_cross_into_yaml(tmp_path):
     assert system.infer(0.0, 4.0) == pytest.approx((1 * 3 + 0.5 * -3) / 1.5, rel=1e-15)
     assert fis_format.loads(fis_format.dumps(system)) == system
     with pytest.raises(RuleBaseError, match=r"rule 2 \(antecedent \[0, 0\]\).*no text form") as info:
-        yaml_format.write(system, tmp_path / "blend.yaml")
+        fuzzcore.save(system, tmp_path / "blend.yaml")
     assert info.value.source == str(tmp_path / "blend.yaml") and info.value.place == "rules[1]"
 
 

@@ -1,0 +1,253 @@
+"""Membership-function parameters as one vector, with the constraints that keep every term valid.
+
+:class:`TermSpace` lists the parameters of the tuned variables' terms (inputs, and
+Mamdani/Sugeno-constant outputs), in variable, term and parameter order, and says where
+each lives in the packed arrays (:mod:`fuzzcore.compiled`), so a candidate vector is
+written straight into a copy of ``fblob``.
+
+Every parameter has a role, from its membership-function kind:
+
+=======  ==============================================  =======================  ========
+role     meaning                                         constraint               scale
+=======  ==============================================  =======================  ========
+point    a place on the variable's axis (vertex, centre) inside the range          span
+width    a spread in the variable's units (sigma, a)     > 0                      span
+slope    a steepness (sigmf's a), units^-1               none                     1 / span
+shape    a unitless exponent (gbellmf's b)               > 0                      1
+=======  ==============================================  =======================  ========
+
+and the vertex kinds (trimf, trapmf, pimf, smf, zmf, linsmf, linzmf) keep their points
+in non-decreasing order with a positive width (first point < last point). A point that
+starts outside its variable's range (MATLAB allows feet beyond the range) may stay
+anywhere between that start and the range. ``scale`` is what one unit of a tuner's step
+is worth: a pattern-search mesh of 0.01 moves a vertex by 1 % of its variable's range.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Sequence
+
+import numpy as np
+
+from ..membership import resolve_kind
+from ..variables import Term
+
+ROLES: dict[str, tuple[str, ...]] = {
+    "trimf": ("point",) * 3,
+    "trapmf": ("point",) * 4,
+    "linsmf": ("point",) * 2,
+    "linzmf": ("point",) * 2,
+    "smf": ("point",) * 2,
+    "zmf": ("point",) * 2,
+    "pimf": ("point",) * 4,
+    "gaussmf": ("width", "point"),
+    "gauss2mf": ("width", "point", "width", "point"),
+    "gbellmf": ("width", "shape", "point"),
+    "sigmf": ("slope", "point"),
+    "dsigmf": ("slope", "point", "slope", "point"),
+    "psigmf": ("slope", "point", "slope", "point"),
+    "constant": ("point",),
+}
+#: kinds whose parameters are vertices: non-decreasing, first < last
+ORDERED = frozenset({"trimf", "trapmf", "linsmf", "linzmf", "smf", "zmf", "pimf"})
+
+
+class TermSpace:
+    """The membership-function parameters of a system's variables as one vector.
+
+    Parameters
+    ----------
+    system : FuzzySystem
+    variables : sequence of str, optional
+        Names of the variables whose terms are tuned; default every input and output.
+
+    Attributes
+    ----------
+    system : FuzzySystem
+        The starting system (its values are :attr:`x0`).
+    names : tuple of str
+        ``"variable.term[k]"`` for each parameter (``k`` 0-based, MATLAB's order).
+    x0 : ndarray (n_params,)
+        The starting values.
+    scale : ndarray (n_params,)
+        A tuner's unit step for each parameter (table in the module docstring).
+    lower, upper : ndarray (n_params,)
+        Bounds (``-inf`` / ``inf`` where none); strict for widths and shapes.
+    f_positions : ndarray (n_params,), int64
+        Index of each parameter in ``fblob``.
+    i_positions : ndarray (0,), int64
+        None: a term space writes nothing into ``iblob``.
+    refresh : bool
+        Whether a candidate changes output terms (the output tables need recomputing).
+    """
+
+    def __init__(self, system, variables: Sequence[str] | None = None):
+        all_vars = [("inputs", i, v) for i, v in enumerate(system.inputs)] + \
+                   [("outputs", o, v) for o, v in enumerate(system.outputs)]
+        known = [v.name for _, _, v in all_vars]
+        if variables is None:
+            chosen = known
+        else:
+            if isinstance(variables, str):
+                raise TypeError(f"variables={variables!r}: expected a sequence of names, e.g. [{variables!r}]")
+            chosen = list(variables)
+            unknown = [n for n in chosen if n not in known]
+            if unknown or not chosen:
+                raise ValueError(f"variables {chosen!r}: expected names among {', '.join(known)}"
+                                 + (f"; unknown: {', '.join(unknown)}" if unknown else "; got none"))
+        _, _, layout = system.packed
+        in_start, out_start = layout.in_params.start, layout.out_params.start
+        K, P = layout.max_terms_out, layout.out_param_width
+
+        names, x0, scale, lower, upper, strict, positions = [], [], [], [], [], [], []
+        chains = []  # parameter index lists that must be non-decreasing with first < last
+        terms = []  # (first, end, "inputs"/"outputs", variable index, term index k, ordered kind?)
+        refresh = False
+        flat = 0  # flat input-term index
+        for kind_of_var, index, var in all_vars:
+            tuned = var.name in chosen
+            for k, term in enumerate(var.terms):
+                if kind_of_var == "inputs":
+                    base = in_start + flat * 4
+                    flat += 1
+                else:
+                    base = out_start + (index * K + k) * P
+                if not tuned:
+                    continue
+                kind = resolve_kind(term.kind).name
+                if kind not in ROLES:
+                    raise ValueError(f"term {term.name!r} of {var.name!r} is {kind}: its parameters are not "
+                                     f"tunable here (tunable kinds: {', '.join(ROLES)})")
+                lo, hi = var.range
+                span = hi - lo
+                first = len(names)
+                for j, (role, value) in enumerate(zip(ROLES[kind], term.params)):
+                    names.append(f"{var.name}.{term.name}[{j}]")
+                    x0.append(value)
+                    positions.append(base + j)
+                    if role == "point":
+                        scale.append(span)
+                        lower.append(min(lo, value))
+                        upper.append(max(hi, value))
+                        strict.append(False)
+                    elif role == "slope":
+                        scale.append(1.0 / span)
+                        lower.append(-np.inf)
+                        upper.append(np.inf)
+                        strict.append(False)
+                    else:  # width, shape: positive
+                        scale.append(span if role == "width" else 1.0)
+                        lower.append(0.0)
+                        upper.append(np.inf)
+                        strict.append(True)
+                        if not value > 0:
+                            raise ValueError(f"term {term.name!r} of {var.name!r} ({kind} {list(term.params)}): "
+                                             f"parameter {j + 1} ({role}) is {value:g}; tuning keeps it > 0, "
+                                             "so it must start > 0")
+                terms.append((first, len(names), kind_of_var, index, k, kind in ORDERED))
+                if kind in ORDERED:
+                    chain = list(range(first, len(names)))
+                    if not term.params[0] < term.params[-1]:
+                        raise ValueError(f"term {term.name!r} of {var.name!r} ({kind} {list(term.params)}) "
+                                         "has zero width; tuning keeps first < last, so it must start so")
+                    chains.append(chain)
+                if kind_of_var == "outputs":
+                    refresh = True
+        if not names:
+            raise ValueError(f"variables {chosen!r} have no terms to tune")
+        self.system = system
+        self.variables = tuple(chosen)
+        self.names = tuple(names)
+        self.x0 = np.array(x0, dtype=np.float64)
+        self.scale = np.array(scale, dtype=np.float64)
+        self.lower = np.array(lower, dtype=np.float64)
+        self.upper = np.array(upper, dtype=np.float64)
+        self._strict = np.array(strict, dtype=bool)
+        self._chains = chains
+        self._terms = terms
+        self._term_of = np.repeat(np.arange(len(terms)), [end - first for first, end, *_ in terms])
+        self.f_positions = np.array(positions, dtype=np.int64)
+        self.i_positions = np.empty(0, dtype=np.int64)
+        self.refresh = refresh
+
+    @property
+    def n_params(self) -> int:
+        return self.x0.shape[0]
+
+    def feasible(self, P: np.ndarray) -> np.ndarray:
+        """Which candidates give valid terms.
+
+        Parameters
+        ----------
+        P : ndarray (n_candidates, n_params)
+
+        Returns
+        -------
+        ndarray (n_candidates,), bool
+        """
+        ok = np.isfinite(P).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            ok &= (P <= self.upper).all(axis=1)
+            ok &= np.where(self._strict, P > self.lower, P >= self.lower).all(axis=1)
+            for chain in self._chains:
+                V = P[:, chain]
+                ok &= (np.diff(V, axis=1) >= 0).all(axis=1) & (V[:, 0] < V[:, -1])
+        return ok
+
+    def changes(self, base: np.ndarray, p: np.ndarray) -> list[tuple]:
+        """What moving from ``base`` to ``p`` can change, for :class:`~fuzzcore.tune.objective.Objective`.
+
+        One entry per changed term: ``("interval", v, lo, hi)`` (memberships of input v can
+        change only for inputs in [lo, hi]), ``("input", v)`` (anywhere on input v) or
+        ``("output_term", o, k)`` (term k of output o: only samples whose rules conclude it).
+
+        A vertex kind's membership depends on its vertices piecewise: moving the single
+        vertex j changes it only between vertices j - 1 and j + 1 (or, for the first/last
+        vertex, from its lower/higher position); moving several, only inside the hull of
+        the old and new vertices. Other kinds are smooth everywhere.
+        """
+        out = []
+        for t in np.unique(self._term_of[np.flatnonzero(p != base)]):
+            first, end, role, var, k, ordered = self._terms[t]
+            if role == "outputs":
+                out.append(("output_term", var, k))
+            elif not ordered:
+                out.append(("input", var))
+            else:
+                old, new = base[first:end], p[first:end]
+                moved = np.flatnonzero(old != new)
+                if moved.shape[0] == 1:
+                    j, last = int(moved[0]), end - first - 1
+                    lo = min(old[j], new[j]) if j == 0 else old[j - 1]
+                    hi = max(old[j], new[j]) if j == last else old[j + 1]
+                else:
+                    lo, hi = min(old.min(), new.min()), max(old.max(), new.max())
+                out.append(("interval", var, float(lo), float(hi)))
+        return out
+
+    def blob_values(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(fblob values (n, n_params), iblob values (n, 0))`` to write at the positions."""
+        return np.ascontiguousarray(P, dtype=np.float64), np.empty((P.shape[0], 0), dtype=np.int64)
+
+    def to_system(self, p: np.ndarray):
+        """The system with the parameters ``p`` (n_params,) written into its terms.
+
+        Raises ``ValueError`` if ``p`` violates the constraints.
+        """
+        p = np.asarray(p, dtype=np.float64)
+        if p.shape != self.x0.shape:
+            raise ValueError(f"parameter vector has shape {p.shape}, expected {self.x0.shape}")
+        if not self.feasible(p[None])[0]:
+            raise ValueError("parameter vector violates the term constraints (order, range, positive widths)")
+        values = iter(p.tolist())
+        system = self.system
+
+        def rebuilt(var):
+            if var.name not in self.variables:
+                return var
+            terms = tuple(Term(t.name, t.kind, [next(values) for _ in t.params]) for t in var.terms)
+            return dataclasses.replace(var, terms=terms)
+
+        inputs = tuple(rebuilt(v) for v in system.inputs)
+        outputs = tuple(rebuilt(v) for v in system.outputs)
+        return dataclasses.replace(system, inputs=inputs, outputs=outputs)
