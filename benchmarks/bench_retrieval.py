@@ -23,7 +23,7 @@ import pytest
 from monitor import _retrieval_kernels as kernels
 from monitor.boxes import within_range
 from monitor.prior import build_prior
-from monitor.retrieval import RetrievalParams, Retriever, warm_up
+from monitor.retrieval import RetrievalParams, Retriever, _block_means, warm_up
 from monitor.synthetic.generate import generate_frames
 
 PARAMS = RetrievalParams()
@@ -51,10 +51,11 @@ def one_thread_and_report(request):
 
 @pytest.fixture(scope="module")
 def frame():
-    prior = build_prior((str(f.index), f.depth_est) for f in generate_frames("nominal", 1000, n_frames=10)).mean()
+    training = generate_frames("nominal", 1000, n_frames=10)
+    prior = build_prior((str(f.index), f.depth_est) for f in training).mean()
     depth = list(generate_frames("nominal", 0, n_frames=4))[3].depth_est
     warm_up()
-    return depth, prior
+    return depth, prior, _block_means(prior)  # the block prior: once per camera, as Retriever
 
 
 def _record(benchmark, name):
@@ -64,26 +65,28 @@ def _record(benchmark, name):
 # --- the straight NumPy/OpenCV version --------------------------------------------------------
 
 
-def foreground_numpy(depth, prior):
-    """Block means of 1/D - prior over valid pixels, quantised to uint8 (steps 1-2)."""
+def foreground_numpy(depth, block_prior):
+    """Block mean of 1/D over valid pixels minus the block prior, to uint8 (steps 1-2)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        valid = np.isfinite(depth) & (depth > 0) & np.isfinite(prior)
-        value = np.where(valid, np.float32(1.0) / depth - prior, np.float32(0.0)).astype(np.float32)
+        valid = np.isfinite(depth) & (depth > 0)
+        inverse = np.where(valid, np.float32(1.0) / depth, np.float32(0.0)).astype(np.float32)
     count = valid.astype(np.int32)
-    value = value[0::2] + value[1::2]  # same float32 order as the kernel: rows, then columns
-    value = value[:, 0::2] + value[:, 1::2]
+    inverse = inverse[0::2] + inverse[1::2]  # same float32 order as the kernel: rows, then columns
+    inverse = inverse[:, 0::2] + inverse[:, 1::2]
     count = count[0::2] + count[1::2]
     count = count[:, 0::2] + count[:, 1::2]
-    mean = value / np.maximum(count, 1).astype(np.float32)
-    values = np.where(count > 0, np.maximum(mean, np.float32(0.0)), np.float32(-1.0))
+    known = np.isfinite(block_prior)
+    mean = inverse / np.maximum(count, 1).astype(np.float32) - block_prior
+    values = np.where((count > 0) & known, np.maximum(mean, np.float32(0.0)), np.float32(-1.0))
     scale = np.float32(255.0 / PARAMS.full_scale)
     quantised = np.floor(np.minimum(values * scale + np.float32(0.5), np.float32(255.0)))
-    return np.where(values > 0, quantised, 0).astype(np.uint8), count == 0, int((~valid).sum())
+    n_invalid = int((~valid).sum() + count[~known].sum())
+    return np.where(values > 0, quantised, 0).astype(np.uint8), values < 0, n_invalid
 
 
-def retrieve_numpy(depth, prior):
+def retrieve_numpy(depth, block_prior):
     """The whole retrieval, straight: NumPy arithmetic, OpenCV on the whole image."""
-    image, invalid, n_invalid = foreground_numpy(depth, prior)
+    image, invalid, n_invalid = foreground_numpy(depth, block_prior)
     assert n_invalid / depth.size <= PARAMS.max_invalid_fraction
     edges = _blur_canny(image)
     if invalid.any():
@@ -114,9 +117,9 @@ def _blur_canny(image):
 
 
 def test_retrieve_fused(benchmark, frame):
-    depth, prior = frame
+    depth, prior, block_prior = frame
     retriever = Retriever(prior, PARAMS)
-    expected = retrieve_numpy(depth, prior)
+    expected = retrieve_numpy(depth, block_prior)
     assert len(expected) > 0
     np.testing.assert_array_equal(retriever(depth), expected)
     benchmark(retriever, depth)
@@ -124,14 +127,14 @@ def test_retrieve_fused(benchmark, frame):
 
 
 def test_retrieve_numpy(benchmark, frame):
-    depth, prior = frame
-    np.testing.assert_array_equal(retrieve_numpy(depth, prior), Retriever(prior, PARAMS)(depth))
-    benchmark(retrieve_numpy, depth, prior)
+    depth, prior, block_prior = frame
+    np.testing.assert_array_equal(retrieve_numpy(depth, block_prior), Retriever(prior, PARAMS)(depth))
+    benchmark(retrieve_numpy, depth, block_prior)
     _record(benchmark, "retrieve_numpy")
 
 
-def _foreground_fused(depth, prior, values, nearest):
-    n_invalid = kernels.foreground_pairs(depth, prior, values, nearest)
+def _foreground_fused(depth, block_prior, values, nearest):
+    n_invalid = kernels.foreground_pairs(depth, block_prior, values, nearest)
     rows, cols = values.shape
     image = np.empty((rows, cols), np.uint8)
     invalid = np.zeros((rows, cols), np.uint8)
@@ -141,23 +144,23 @@ def _foreground_fused(depth, prior, values, nearest):
 
 
 def test_foreground_fused(benchmark, frame):
-    depth, prior = frame
+    depth, _, block_prior = frame
     values = np.empty((depth.shape[0] // 2, depth.shape[1] // 2), np.float32)
     nearest = np.empty_like(values)
-    np.testing.assert_array_equal(_foreground_fused(depth, prior, values, nearest),
-                                  foreground_numpy(depth, prior)[0])
-    benchmark(_foreground_fused, depth, prior, values, nearest)
+    np.testing.assert_array_equal(_foreground_fused(depth, block_prior, values, nearest),
+                                  foreground_numpy(depth, block_prior)[0])
+    benchmark(_foreground_fused, depth, block_prior, values, nearest)
     _record(benchmark, "foreground_fused")
 
 
 def test_foreground_numpy(benchmark, frame):
-    depth, prior = frame
-    benchmark(foreground_numpy, depth, prior)
+    depth, _, block_prior = frame
+    benchmark(foreground_numpy, depth, block_prior)
     _record(benchmark, "foreground_numpy")
 
 
 def test_blur_and_canny_whole_half_size_image(benchmark, frame):
     # for reference: the OpenCV part the fused version cannot fuse, on the whole image
-    depth, prior = frame
-    benchmark(_blur_canny, foreground_numpy(depth, prior)[0])
+    depth, _, block_prior = frame
+    benchmark(_blur_canny, foreground_numpy(depth, block_prior)[0])
     _record(benchmark, "blur_and_canny")

@@ -4,10 +4,10 @@ From a metric depth map D and the inverse-depth prior (:mod:`monitor.prior`):
 
 1. foreground ``F = max(1/D - prior, 0)``: inverse depth makes near things steep and far
    things flat, and subtracting the prior removes what is usually there (the road just
-   ahead, the usual traffic). With ``downsample = 2`` F is the mean of ``1/D - prior``
-   over the valid pixels of each 2 x 2 block, clipped at 0: a depth network's output is
-   upsampled anyway, and the block mean halves the pixel noise that otherwise turns into
-   edges on the road.
+   ahead, the usual traffic). With ``downsample = 2`` F is computed per 2 x 2 block: the
+   mean of 1/D over the block's valid pixels minus the block's mean prior, clipped at 0.
+   A depth network's output is upsampled anyway, and the block mean halves the pixel
+   noise that otherwise turns into edges on the road.
 2. F is normalised linearly to uint8: ``full_scale`` (1/m) becomes 255 and larger values
    saturate (``full_scale = None``: the frame's largest F becomes 255, as in the paper's
    figure; one absurdly near pixel then flattens every other object).
@@ -25,15 +25,17 @@ The result is the set S of the paper: float64 (M, 5) rows ``cx, cy, w, h, d`` (p
 metres), nearest first. A rectangle covering columns x..x+w-1 and rows y..y+h-1 has
 ``cx = x + w/2``, ``cy = y + h/2`` (pixel i spans [i, i+1), as in :mod:`monitor.boxes`).
 
-Invalid pixels (depth NaN, inf or <= 0, or a NaN prior) are masked: they are left out of
-the block means, a block without a valid pixel counts as "no foreground", and no edge is
-kept within reach of one. A frame with more than ``max_invalid_fraction`` invalid pixels raises
+Invalid pixels (depth NaN, inf or <= 0, or no prior: NaN at that pixel, or at
+``downsample = 2`` in the whole block) are masked: they are left out of the block means, a
+block without a valid pixel counts as "no foreground", and no edge is kept within reach
+of one. A frame with more than ``max_invalid_fraction`` invalid pixels raises
 :class:`InvalidDepthError`, so that garbage never becomes boxes.
 
 Speed: the per-pixel arithmetic is two fused Numba passes (:mod:`monitor._retrieval_kernels`:
-one over the full-resolution maps that also keeps each block's nearest depth, one over the
-blocks), and the blur and Canny run only on the bounding region of the non-zero foreground
-(with a margin that makes this exactly equal to running them on the whole image). Call
+one over the full-resolution depth map, which also keeps each block's nearest depth, and
+one over the blocks); the prior is averaged to blocks once per :class:`Retriever`; the
+blur and Canny run only on the bounding region of the non-zero foreground (with a margin
+that makes this exactly equal to running them on the whole image). Call
 :func:`warm_up` once before a real-time loop (the kernels are also cached on disk). OpenCV
 may run Canny on its own thread pool: set ``cv2.setNumThreads`` as the application needs.
 """
@@ -163,7 +165,9 @@ class RetrievalParams:
             )
         if isinstance(self.blur_size, bool) or not isinstance(self.blur_size, int) \
                 or self.blur_size < 1 or self.blur_size % 2 == 0:
-            raise ValueError(f"blur_size = {self.blur_size!r}, must be an odd integer >= 1 (pixels; 1 = no blur)")
+            raise ValueError(
+                f"blur_size = {self.blur_size!r}, must be an odd integer >= 1 (pixels; 1 = no blur)"
+            )
         if not (math.isfinite(self.canny_low) and self.canny_low >= 0):
             raise ValueError(f"canny_low = {self.canny_low}, must be a finite number >= 0")
         if not (math.isfinite(self.canny_high) and self.canny_high >= self.canny_low):
@@ -243,8 +247,9 @@ class Retriever:
         f = params.downsample
         height, width = self.prior.shape
         self._values = np.empty((-(-height // f), -(-width // f)), dtype=np.float32)
-        # smallest valid depth per block (downsample 2 only; at 1 the depth map itself)
-        self._nearest = np.empty_like(self._values) if f == 2 else None
+        if f == 2:
+            self._block_prior = _block_means(self.prior)
+            self._nearest = np.empty_like(self._values)  # smallest valid depth per block
 
     def __call__(self, depth: np.ndarray) -> np.ndarray:
         """The objects S of one depth map (see :func:`retrieve`)."""
@@ -257,8 +262,13 @@ class Retriever:
     def _run(self, depth: np.ndarray, keep_stages: bool):
         depth = self._check_depth(depth)
         params, values = self.params, self._values
+        rows, cols = values.shape
+        foreground = np.empty((rows, cols), dtype=np.uint8)
+        invalid = np.zeros((rows, cols), dtype=np.uint8)
+        row_any = np.empty(rows, dtype=np.uint8)
+        col_any = np.empty(cols, dtype=np.uint8)
         if params.downsample == 2:
-            n_invalid = kernels.foreground_pairs(depth, self.prior, values, self._nearest)
+            n_invalid = kernels.foreground_pairs(depth, self._block_prior, values, self._nearest)
             nearest = self._nearest
         else:
             n_invalid = kernels.foreground_pixels(depth, self.prior, values)
@@ -268,12 +278,6 @@ class Retriever:
             raise InvalidDepthError(invalid_fraction, params.max_invalid_fraction)
         full_scale = params.full_scale if params.full_scale is not None else max(float(values.max()), 0.0)
         scale = np.float32(255.0 / full_scale) if full_scale > 0 else np.float32(0.0)
-
-        rows, cols = values.shape
-        foreground = np.empty((rows, cols), dtype=np.uint8)
-        invalid = np.zeros((rows, cols), dtype=np.uint8)
-        row_any = np.empty(rows, dtype=np.uint8)
-        col_any = np.empty(cols, dtype=np.uint8)
         kernels.foreground_u8(values, scale, foreground, row_any, col_any, invalid, n_invalid > 0)
 
         edges = np.zeros((rows, cols), dtype=np.uint8)
@@ -318,7 +322,8 @@ class Retriever:
         return np.ascontiguousarray(depth)
 
 
-def retrieve(depth: np.ndarray, prior: np.ndarray, params: RetrievalParams = RetrievalParams()) -> np.ndarray:
+def retrieve(depth: np.ndarray, prior: np.ndarray,
+             params: RetrievalParams = RetrievalParams()) -> np.ndarray:
     """The safety-critical objects S of one depth map.
 
     One-shot form of :class:`Retriever` (which validates the prior once and reuses memory;
@@ -348,7 +353,8 @@ def retrieve(depth: np.ndarray, prior: np.ndarray, params: RetrievalParams = Ret
     return Retriever(prior, params)(depth)
 
 
-def retrieve_stages(depth: np.ndarray, prior: np.ndarray, params: RetrievalParams = RetrievalParams()) -> RetrievalStages:
+def retrieve_stages(depth: np.ndarray, prior: np.ndarray,
+                    params: RetrievalParams = RetrievalParams()) -> RetrievalStages:
     """:func:`retrieve`, also returning the intermediate images (see :class:`RetrievalStages`)."""
     return Retriever(prior, params).stages(depth)
 
@@ -395,6 +401,21 @@ def _boxes_from_edges(edges: np.ndarray, offset: tuple[int, int], depth: np.ndar
     return boxes[np.argsort(boxes[:, 4], kind="stable")]
 
 
+def _block_means(prior: np.ndarray) -> np.ndarray:
+    """Mean of the finite values of each 2 x 2 block (partial at odd edges), NaN if none;
+    float32 (ceil(H / 2), ceil(W / 2))."""
+    height, width = prior.shape
+    pad = ((0, height % 2), (0, width % 2))
+    finite = np.pad(np.isfinite(prior), pad)
+    values = np.pad(np.where(np.isfinite(prior), prior, 0.0).astype(np.float64), pad)
+    sums = values[0::2, 0::2] + values[0::2, 1::2] + values[1::2, 0::2] + values[1::2, 1::2]
+    counts = (finite[0::2, 0::2].astype(np.int64) + finite[0::2, 1::2]
+              + finite[1::2, 0::2] + finite[1::2, 1::2])
+    means = np.full(sums.shape, np.nan)
+    np.divide(sums, counts, out=means, where=counts > 0)
+    return means.astype(np.float32)
+
+
 def _percentile_depth(depth: np.ndarray, rect: np.ndarray, q: float) -> float:
     x, y, w, h = rect
     window = depth[y:y + h, x:x + w]
@@ -406,10 +427,10 @@ def warm_up() -> None:
     """Compile (or load from the disk cache) every Numba kernel on a tiny frame."""
     depth = np.ones((3, 3), dtype=np.float32)
     prior = np.zeros((3, 3), dtype=np.float32)
-    values = np.empty((2, 2), dtype=np.float32)
-    kernels.foreground_pixels(depth, prior, np.empty((3, 3), dtype=np.float32))
-    kernels.foreground_pairs(depth, prior, values, np.empty_like(values))
+    values = np.zeros((2, 2), dtype=np.float32)
     flags = np.empty(2, dtype=np.uint8)
     image = np.empty((2, 2), dtype=np.uint8)
+    kernels.foreground_pixels(depth, prior, np.empty((3, 3), dtype=np.float32))
+    kernels.foreground_pairs(depth, values.copy(), values, np.empty_like(values))
     kernels.foreground_u8(values, np.float32(1.0), image, flags, flags.copy(), image.copy(), True)
     kernels.rect_min_depth(depth, np.zeros((1, 4), dtype=np.int64))

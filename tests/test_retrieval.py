@@ -87,26 +87,46 @@ def _match(found, truth):
 # --- the per-pixel passes against NumPy ------------------------------------------------------
 
 
+def _block_prior(prior):
+    """Slow and obvious: the mean of the finite prior values of each 2 x 2 block."""
+    rows, cols = -(-prior.shape[0] // 2), -(-prior.shape[1] // 2)
+    out = np.full((rows, cols), np.nan, dtype=np.float32)
+    for bi in range(rows):
+        for bj in range(cols):
+            block = [float(p) for p in prior[2 * bi:2 * bi + 2, 2 * bj:2 * bj + 2].ravel() if np.isfinite(p)]
+            if block:
+                out[bi, bj] = sum(block) / len(block)
+    return out
+
+
 def _foreground_numpy(depth, prior, downsample, full_scale):
     """Straight NumPy, the same float32 operations in the same order as the kernels."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        valid = np.isfinite(depth) & (depth > 0) & np.isfinite(prior)
-        value = np.where(valid, np.float32(1.0) / depth - prior, np.float32(0.0)).astype(np.float32)
-    count = valid.astype(np.int32)
-    if downsample == 2:  # pad to even sizes with empty pixels (x + 0 is exact)
-        pad = ((0, depth.shape[0] % 2), (0, depth.shape[1] % 2))
-        value, count = np.pad(value, pad), np.pad(count, pad)
-        value = value[0::2] + value[1::2]                  # top + bottom, then the column pair
-        value = value[:, 0::2] + value[:, 1::2]
-        count = count[0::2] + count[1::2]
-        count = count[:, 0::2] + count[:, 1::2]
-    mean = value / np.maximum(count, 1).astype(np.float32)
-    values = np.where(count > 0, np.maximum(mean, np.float32(0.0)), np.float32(-1.0))
+        if downsample == 1:
+            valid = np.isfinite(depth) & (depth > 0) & np.isfinite(prior)
+            values = np.where(valid, np.maximum(np.float32(1.0) / depth - prior, np.float32(0.0)),
+                              np.float32(-1.0)).astype(np.float32)
+            n_invalid = int((~valid).sum())
+        else:  # block mean of 1/D over valid depths minus the block's mean prior
+            valid = np.isfinite(depth) & (depth > 0)
+            inverse = np.where(valid, np.float32(1.0) / depth, np.float32(0.0)).astype(np.float32)
+            count = valid.astype(np.int32)
+            pad = ((0, depth.shape[0] % 2), (0, depth.shape[1] % 2))  # empty pixels; x + 0 is exact
+            inverse, count = np.pad(inverse, pad), np.pad(count, pad)
+            total = inverse[0::2] + inverse[1::2]                     # top + bottom, then the pair
+            total = total[:, 0::2] + total[:, 1::2]
+            count = count[0::2] + count[1::2]
+            count = count[:, 0::2] + count[:, 1::2]
+            block_prior = _block_prior(prior)
+            known = np.isfinite(block_prior)
+            mean = total / np.maximum(count, 1).astype(np.float32) - block_prior
+            values = np.where((count > 0) & known, np.maximum(mean, np.float32(0.0)), np.float32(-1.0))
+            n_invalid = int((~valid).sum() + count[~known].sum())
     scale_max = full_scale if full_scale is not None else max(float(values.max()), 0.0)
     scale = np.float32(255.0 / scale_max) if scale_max > 0 else np.float32(0.0)
     quantised = np.floor(np.minimum(values * scale + np.float32(0.5), np.float32(255.0)))
     image = np.where(values > 0, quantised, 0).astype(np.uint8)
-    return image, count == 0, scale_max, int((~valid).sum())
+    return image, values < 0, scale_max, n_invalid
 
 
 def _random_frame(seed, shape=(37, 53), invalid_share=0.1):
@@ -137,11 +157,11 @@ def test_block_minima_are_the_smallest_valid_depth_of_each_block(seed, shape):
     depth, prior = _random_frame(seed, shape=shape, invalid_share=0.4)
     rows, cols = -(-shape[0] // 2), -(-shape[1] // 2)
     values, nearest = np.empty((rows, cols), np.float32), np.empty((rows, cols), np.float32)
-    kernels.foreground_pairs(depth, prior, values, nearest)
+    kernels.foreground_pairs(depth, _block_prior(prior), values, nearest)
     for bi in range(rows):
         for bj in range(cols):
             block = depth[2 * bi:2 * bi + 2, 2 * bj:2 * bj + 2].ravel()
-            valid = [float(d) for d in block if np.isfinite(d) and d > 0]  # the prior plays no part
+            valid = [float(d) for d in block if np.isfinite(d) and d > 0]
             assert nearest[bi, bj] == (min(valid) if valid else np.inf)
 
 
@@ -261,13 +281,17 @@ def test_holes_in_an_object_are_masked_not_turned_into_boxes():
     assert not stages.edges[stages.invalid].any()
 
 
-def test_a_nan_prior_pixel_is_an_invalid_pixel():
+def test_pixels_without_a_prior_are_invalid():
     depth, _ = _scene([NEAR[1]])
     prior = PRIOR.copy()
     prior[:, :40] = np.nan
+    prior[::2, 100] = np.nan  # one pixel per block: the block mean of the other three stands
     stages = retrieve_stages(depth, prior)  # 2 x 2 blocks: block columns 0-19 have no prior
     assert stages.invalid[:, :20].all() and not stages.invalid[:, 20:].any()
     assert stages.invalid_fraction == pytest.approx(40 / depth.shape[1])
+    full = retrieve_stages(depth, prior, RetrievalParams(downsample=1))  # per pixel
+    assert full.invalid[:, :40].all() and full.invalid[::2, 100].all()
+    assert full.invalid.sum() == 40 * depth.shape[0] + depth.shape[0] // 2
 
 
 def test_a_mostly_invalid_frame_raises_with_the_fraction():
