@@ -1,10 +1,11 @@
 """The stages of the depth-based retrieval as one image, like the paper's Fig. 2.
 
 Panels, left to right: (a) the depth map, (b) its inverse, (c) the inverse minus the prior
-(the foreground the edges are found on, at the retrieval's resolution), (d) the Canny edges (red, thickened to stay visible
-at panel size) and the retrieved boxes with their depth (green) over the camera frame, or
-over the depth map when no frame is given. (a) and (b) are linearly normalised over their
-valid pixels; invalid pixels (blocks in (c)) are drawn blue in (a)-(c).
+(the foreground the edges are found on, at the retrieval's resolution), (d) the Canny
+edges (red, thickened to stay visible at panel size) and the retrieved boxes with their
+depth (green) over the camera frame, or over the depth map when no frame is given. (a) and
+(b) are linearly normalised over their valid pixels; invalid pixels (blocks in (c)) are
+drawn blue in (a)-(c).
 
 Matplotlib runs on its Agg canvas directly (no pyplot, no global backend switch), so this
 works headless and from threads.
@@ -62,7 +63,7 @@ def save_retrieval_figure(path: str | Path, depth: np.ndarray, prior: np.ndarray
         raise ValueError(f"figure path {path} must end in .png")
     if panel_width < 16:
         raise ValueError(f"panel_width = {panel_width}, must be >= 16 pixels")
-    stages = Retriever(prior, params).stages(depth)
+    stages = Retriever(prior, params).stages(depth)  # validates depth and prior first
     height, width = depth.shape
     if image is not None and (not isinstance(image, np.ndarray) or image.dtype != np.uint8
                               or image.shape != (height, width, 3)):
@@ -94,7 +95,8 @@ def save_retrieval_figure(path: str | Path, depth: np.ndarray, prior: np.ndarray
         ax.set_title(title, fontsize=9)
         ax.set_axis_off()
     for cx, cy, w, h, d in stages.boxes:
-        axes[3].add_patch(Rectangle((cx - w / 2, cy - h / 2), w, h, fill=False, edgecolor="lime", linewidth=1.2))
+        axes[3].add_patch(Rectangle((cx - w / 2, cy - h / 2), w, h, fill=False, edgecolor="lime",
+                                    linewidth=1.2))
         axes[3].text(cx - w / 2, cy - h / 2, f"{d:.1f} m", color="lime", fontsize=7, va="bottom")
     figure.tight_layout()
     FigureCanvasAgg(figure).print_png(str(path))

@@ -223,7 +223,8 @@ class OnnxDepthEstimator:
         ndarray of shape (H, W), float32
             Metres; NaN where the model gives no valid depth.
         """
-        if not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3 or image.shape[2] != 3:
+        if (not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3
+                or image.shape[2] != 3):
             raise ValueError(
                 f"image: {type(image).__name__} of shape {getattr(image, 'shape', None)} and dtype "
                 f"{getattr(image, 'dtype', None)}, expected a uint8 (H, W, 3) RGB image"
@@ -269,7 +270,9 @@ def _resolve_preset(preset: str | DepthPreset) -> DepthPreset:
     try:
         return PRESETS[preset]
     except (KeyError, TypeError):
-        raise ValueError(f"preset = {preset!r}, expected one of {', '.join(PRESETS)} or a DepthPreset") from None
+        raise ValueError(
+            f"preset = {preset!r}, expected one of {', '.join(PRESETS)} or a DepthPreset"
+        ) from None
 
 
 def _resolve_scale(preset: DepthPreset, scale: float | None) -> float:

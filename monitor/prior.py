@@ -10,8 +10,9 @@ Per pixel, the mean is taken over the frames in which that pixel is valid (finit
 > 0): the accumulator keeps a float64 sum of 1/D and an integer count of valid samples
 per pixel, and the prior is ``sum / count``. An invalid pixel therefore neither pulls the
 mean towards 0 nor counts as a sample. A pixel that was never valid has no prior: it is
-NaN in the result, and the retrieval treats it as an invalid pixel in every frame (it
-judges nothing it has no background for). Where validity depends on depth (say a sensor
+NaN in the result, and the retrieval judges nothing it has no background for: such a
+pixel is invalid in every frame (at ``downsample = 2`` the retrieval averages the prior
+over 2 x 2 blocks, and only a block without any prior is invalid). Where validity depends on depth (say a sensor
 that drops far returns) the mean over the valid samples is biased towards near values;
 :attr:`InverseDepthPrior.count` is kept so that callers can inspect the support.
 
