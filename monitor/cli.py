@@ -18,6 +18,7 @@ COMMANDS = {
     "simulate": "monitor.commands.simulate",
     "prior": "monitor.commands.prior",
     "convert": "monitor.commands.convert",
+    "tune": "monitor.commands.tune",
 }
 
 

@@ -13,7 +13,7 @@
 >>> tuned = PatternSearch(fis, seed=0).fit(table.X, table.y, table.groups).system_
 """
 from .data import FeatureTable, check_data, read_csv
-
+from .joint import JointTuner
 from .kfold import EarlyStopping, fold_labels
 from .objective import Objective
 from .particleswarm import ParticleSwarm

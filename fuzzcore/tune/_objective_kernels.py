@@ -1,17 +1,22 @@
 """Numba kernels of the batched tuning objective. Private: callers go through
 :class:`fuzzcore.tune.objective.Objective`, which validates everything first.
 
-One call scores many candidate systems on one data set: each candidate gets its own copy
-of the packed arrays with its parameters written in, then (candidate, chunk of samples)
-tasks run in parallel through the engine's :func:`fuzzcore._kernels.evaluate_serial`, so
-a batch of one candidate still uses every core.
+Each kernel scores candidate systems one after another on the calling thread: a
+candidate's parameters are written into a copy of the packed arrays and the data run
+through the engine's :func:`fuzzcore._kernels.evaluate_serial`. The kernels release the
+GIL, so :mod:`fuzzcore.tune.batch` runs blocks of candidates on several threads. (Not
+Numba's ``parallel``: on a machine shared with other work, its threads wait for each
+other at every parallel region, which made single-candidate calls three times slower.)
 
-Sums have one canonical order, whatever the thread count and whichever kernel computes
-them: per block of :data:`CHUNK` consecutive samples, the losses of each sample's outputs
-in order; then the block sums in block order. :func:`subset_sums`, which re-evaluates only
-some samples of each candidate and takes the others' losses from a base point, therefore
-returns bit for bit what :func:`full_sums` returns when those other samples' predictions
-are unchanged.
+Inputs are evaluated once per distinct row (``U``; ``inverse[i]`` is sample i's row):
+identical inputs give identical outputs, and feature tables repeat rows (every frame in
+which nothing was matched has IoU~ = 0, RDD~ = 1).
+
+Sums have one canonical order, whichever kernel computes them: per block of
+:data:`CHUNK` consecutive samples, the losses of each sample's outputs in order; then the
+block sums in block order. :func:`subset_sums`, which re-evaluates only some rows for a
+candidate and takes the others' predictions from a base point, therefore returns bit for
+bit what :func:`full_sums` returns when those other rows' predictions are unchanged.
 
 Note: Numba's cache does not notice changes to the engine kernels this module calls;
 after editing :mod:`fuzzcore._kernels`, delete this package's ``__pycache__``.
@@ -19,18 +24,20 @@ after editing :mod:`fuzzcore._kernels`, delete this package's ``__pycache__``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from .. import _kernels as K
 
 #: loss codes: squared error (RMSE), absolute error (MAE)
 LOSS_SQUARED, LOSS_ABSOLUTE = 0, 1
 
-#: samples per parallel task and per block of the canonical sum
+#: samples per block of the canonical sum
 CHUNK = 512
 
+_jit = dict(cache=True, nogil=True)
 
-@njit(cache=True, nogil=True)
+
+@njit(**_jit)
 def _write_candidate(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, fb, ib):
     """Copy the base arrays into ``fb``/``ib`` and write one candidate's values at the positions."""
     fb[:] = fblob
@@ -43,114 +50,76 @@ def _write_candidate(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, fb, ib):
         K.refresh_tables(fb, ib)
 
 
-@njit(parallel=True, cache=True, nogil=True)
-def _candidates(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh):
-    n_cand = max(f_val.shape[0], i_val.shape[0])
-    fbs = np.empty((n_cand, fblob.shape[0]))
-    ibs = np.empty((n_cand, iblob.shape[0]), dtype=np.int64)
-    for c in prange(n_cand):
-        _write_candidate(fblob, iblob, f_pos, f_val[c], i_pos, i_val[c], refresh, fbs[c], ibs[c])
-    return fbs, ibs
+@njit(**_jit)
+def _canonical_sum(inverse, Y, pred, fresh, position, loss):
+    """Summed loss over samples (canonical order); sample i's prediction is ``fresh[position[u]]``
+    where ``u = inverse[i]`` has ``position[u] >= 0``, else ``pred[u]``."""
+    n, n_out = Y.shape
+    total = 0.0
+    for a in range(0, n, CHUNK):
+        s = 0.0
+        for i in range(a, min(n, a + CHUNK)):
+            u = inverse[i]
+            p = position[u]
+            for o in range(n_out):
+                d = (fresh[p, o] if p >= 0 else pred[u, o]) - Y[i, o]
+                s += d * d if loss == LOSS_SQUARED else abs(d)
+        total += s
+    return total
 
 
-@njit(inline="always", cache=True, nogil=True)
-def _loss(pred, target, loss):
-    d = pred - target
-    return d * d if loss == LOSS_SQUARED else abs(d)
-
-
-@njit(parallel=True, cache=True, nogil=True)
-def full_sums(X, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, sums):
+@njit(**_jit)
+def full_sums(U, inverse, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, sums):
     """``sums[c]`` = summed loss of candidate ``c`` over every sample and output.
 
     Parameters
     ----------
-    X : (n, n_in) float64;  Y : (n, n_out) float64 targets
+    U : (m, n_in) float64, distinct input rows;  inverse : (n,) int64, row of each sample
+    Y : (n, n_out) float64 targets
     fblob, iblob : the base system's packed arrays
     f_pos (nf,), f_val (n_cand, nf) : fblob positions and each candidate's values
-    i_pos (ni,), i_val (n_cand, ni) : iblob positions and values (one of nf, ni may be 0,
-        with ``(n_cand, 0)`` values)
+    i_pos (ni,), i_val (n_cand, ni) : iblob positions and values (nf or ni may be 0)
     refresh : bool, recompute output tables (output terms changed)
     loss : LOSS_SQUARED or LOSS_ABSOLUTE
     sums : (n_cand,) output; NaN where some prediction is NaN
     """
-    fbs, ibs = _candidates(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh)
-    n_cand = sums.shape[0]
-    n, n_out = Y.shape
-    n_chunks = (n + CHUNK - 1) // CHUNK
-    partial = np.empty((n_cand, n_chunks))
-    for task in prange(n_cand * n_chunks):
-        c, k = task // n_chunks, task % n_chunks
-        a = k * CHUNK
-        b = min(n, a + CHUNK)
-        pred = np.empty((b - a, n_out))
-        K.evaluate_serial(X[a:b], fbs[c], ibs[c], pred)
-        s = 0.0
-        for i in range(b - a):
-            for o in range(n_out):
-                s += _loss(pred[i, o], Y[a + i, o], loss)
-        partial[c, k] = s
-    for c in range(n_cand):
-        s = 0.0
-        for k in range(n_chunks):
-            s += partial[c, k]
-        sums[c] = s
+    fb, ib = np.empty_like(fblob), np.empty_like(iblob)
+    pred = np.empty((U.shape[0], Y.shape[1]))
+    position = np.full(U.shape[0], -1, dtype=np.int64)
+    for c in range(sums.shape[0]):
+        _write_candidate(fblob, iblob, f_pos, f_val[c], i_pos, i_val[c], refresh, fb, ib)
+        K.evaluate_serial(U, fb, ib, pred)
+        sums[c] = _canonical_sum(inverse, Y, pred, pred, position, loss)
 
 
-@njit(parallel=True, cache=True, nogil=True)
-def sample_losses(X, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, out):
-    """``out[i, o]`` = loss of one candidate (``f_val``/``i_val`` of shape (1, .)) at sample i, output o."""
-    fbs, ibs = _candidates(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh)
-    n, n_out = Y.shape
-    n_chunks = (n + CHUNK - 1) // CHUNK
-    for k in prange(n_chunks):
-        a = k * CHUNK
-        b = min(n, a + CHUNK)
-        pred = np.empty((b - a, n_out))
-        K.evaluate_serial(X[a:b], fbs[0], ibs[0], pred)
-        for i in range(b - a):
-            for o in range(n_out):
-                out[a + i, o] = _loss(pred[i, o], Y[a + i, o], loss)
+@njit(**_jit)
+def predictions(U, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, out):
+    """``out`` (m, n_out) = outputs of one candidate (``f_val``/``i_val`` of shape (1, .)) at the rows U."""
+    fb, ib = np.empty_like(fblob), np.empty_like(iblob)
+    _write_candidate(fblob, iblob, f_pos, f_val[0], i_pos, i_val[0], refresh, fb, ib)
+    K.evaluate_serial(U, fb, ib, out)
 
 
-@njit(parallel=True, cache=True, nogil=True)
-def subset_sums(X, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, base_loss, subset, start,
-                task_cand, task_lo, sums):
-    """Summed loss of each candidate, re-evaluating only its subset of samples.
+@njit(**_jit)
+def subset_sums(U, inverse, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, base_pred, rows, start,
+                sums):
+    """Summed loss of each candidate, re-evaluating only some rows.
 
-    Candidate ``c`` re-evaluates the samples ``subset[start[c]:start[c + 1]]`` (sorted,
-    distinct); every other sample contributes ``base_loss`` (n, n_out). Tasks are
-    ``(task_cand[t], subset positions task_lo[t] .. min(task_lo[t] + CHUNK, start[c + 1]))``.
-    ``sums`` (n_cand,) is filled in the canonical order (module docstring).
+    Candidate ``c`` re-evaluates the rows ``rows[start[c]:start[c + 1]]`` (distinct); every
+    other row keeps its prediction in ``base_pred`` (m, n_out). ``sums`` (n_cand,) is
+    filled in the canonical order (module docstring).
     """
-    fbs, ibs = _candidates(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh)
-    n_cand = sums.shape[0]
-    n, n_out = Y.shape
-    fresh = np.empty((subset.shape[0], n_out))
-    for t in prange(task_cand.shape[0]):
-        c = task_cand[t]
-        a = task_lo[t]
-        b = min(a + CHUNK, start[c + 1])
-        Xs = np.empty((b - a, X.shape[1]))
-        for i in range(b - a):
-            Xs[i] = X[subset[a + i]]
-        pred = np.empty((b - a, n_out))
-        K.evaluate_serial(Xs, fbs[c], ibs[c], pred)
-        for i in range(b - a):
-            for o in range(n_out):
-                fresh[a + i, o] = _loss(pred[i, o], Y[subset[a + i], o], loss)
-    for c in prange(n_cand):
-        j, end = start[c], start[c + 1]
-        total = 0.0
-        for a in range(0, n, CHUNK):
-            s = 0.0
-            for i in range(a, min(n, a + CHUNK)):
-                if j < end and subset[j] == i:
-                    for o in range(n_out):
-                        s += fresh[j, o]
-                    j += 1
-                else:
-                    for o in range(n_out):
-                        s += base_loss[i, o]
-            total += s
-        sums[c] = total
+    fb, ib = np.empty_like(fblob), np.empty_like(iblob)
+    position = np.full(U.shape[0], -1, dtype=np.int64)
+    for c in range(sums.shape[0]):
+        _write_candidate(fblob, iblob, f_pos, f_val[c], i_pos, i_val[c], refresh, fb, ib)
+        j0, m = start[c], start[c + 1] - start[c]
+        Us = np.empty((m, U.shape[1]))
+        for j in range(m):
+            Us[j] = U[rows[j0 + j]]
+            position[rows[j0 + j]] = j
+        fresh = np.empty((m, Y.shape[1]))
+        K.evaluate_serial(Us, fb, ib, fresh)
+        sums[c] = _canonical_sum(inverse, Y, base_pred, fresh, position, loss)
+        for j in range(m):
+            position[rows[j0 + j]] = -1

@@ -16,6 +16,12 @@ from ``seed``, runs the search (over cross-validation folds when ``n_folds > 1``
     validation metric of each fold's chosen point; empty without folds), ``cv_score``
     (their mean, NaN without folds), ``fold_nit``, ``names`` (one per parameter).
 
+With ``require_firing`` (the default), a candidate that leaves some training sample with
+no rule firing is never chosen (:class:`~fuzzcore.tune.objective.Objective`): otherwise
+a search can win by moving every term away from awkward data and letting the
+``no_rule_fired`` fallback (a constant) answer there, which leaves a rule base that no
+longer says anything about those inputs.
+
 ``callback(intermediate_result)`` is called after every iteration with an
 ``OptimizeResult`` holding ``x``, ``fun`` (the best training metric so far), ``nit``,
 ``nfev``, ``fold`` (1-based; 0 without folds) and ``method``; raising ``StopIteration``
@@ -31,6 +37,7 @@ import numbers
 import numpy as np
 from scipy.optimize import OptimizeResult
 
+from ..system import FuzzySystem
 from .data import check_data
 from .kfold import EarlyStopping, fold_labels
 from .objective import METRICS, Objective
@@ -61,6 +68,21 @@ def plain(value):
     if isinstance(value, np.generic):
         return value.item()
     return value
+
+
+def stalled(history: list[float], stall_iter: int, f_tol: float) -> bool:
+    """The stall test: the best value improved by at most ``f_tol * max(1, |f|)`` over the
+    last ``stall_iter`` iterations (``history``: best value after each iteration, start first)."""
+    return len(history) > stall_iter and history[-1 - stall_iter] - history[-1] <= f_tol * max(1.0, abs(history[-1]))
+
+
+def stop_reason(test: str, tuner, iterations: int) -> str:
+    """Why a search ended, in words (``test``: "stall" or "validation")."""
+    if test == "stall":
+        return (f"relative improvement over the last {tuner.stall_iter} iterations below f_tol = {tuner.f_tol:g} "
+                f"after {iterations} iterations")
+    return (f"validation cost rose more than {tuner.validation_tol:g} above its recent minimum after "
+            f"{iterations} iterations")
 
 
 class Reporter:
@@ -112,20 +134,16 @@ class Tuner:
         return {name: getattr(self, name) for name in names}
 
     def _check_common(self) -> None:
-        from ..system import FuzzySystem
-
         if not isinstance(self.system, FuzzySystem):
             raise TypeError(f"system: expected a fuzzcore.FuzzySystem, got {type(self.system).__name__}")
         if self.metric not in METRICS:
             raise ValueError(f"metric = {self.metric!r}: expected one of {', '.join(METRICS)}")
-        check_number("n_folds", self.n_folds, 1, integer=True)
-        if self.n_folds > 1:
-            check_number("validation_tol", self.validation_tol, 0.0)
-            check_number("validation_window", self.validation_window, 1, integer=True)
         if self.seed is not None and not isinstance(self.seed, (numbers.Integral, np.random.SeedSequence)):
             raise ValueError(f"seed = {self.seed!r}: expected None, an integer or a numpy SeedSequence")
         if self.callback is not None and not callable(self.callback):
             raise TypeError(f"callback = {self.callback!r}: expected a callable or None")
+        if not isinstance(getattr(self, "require_firing", False), bool):
+            raise ValueError(f"require_firing = {self.require_firing!r}: expected True or False")
 
     def fit(self, X, y, groups=None):
         """Tune on ``X`` (n_samples, n_inputs) and ``y`` (n_samples,) or (n_samples, n_outputs).
@@ -134,19 +152,27 @@ class Tuner:
         Returns ``self``.
         """
         self._check_common()
+        check_number("n_folds", self.n_folds, 1, integer=True)
+        if self.n_folds > 1:
+            check_number("validation_tol", self.validation_tol, 0.0)
+            check_number("validation_window", self.validation_window, 1, integer=True)
         self._check_params()
         X, Y, groups = check_data(self.system, X, y, groups)
         rng = np.random.default_rng(self.seed)
         space = self._space(self.system)
         expected = self._expected_evaluations()
-        full = Objective(space, X, Y, self.metric, expected_evaluations=expected)
+        # with folds, the whole data set only scores the start and the result
+        firing = self.require_firing
+        full = Objective(space, X, Y, self.metric, expected_evaluations=expected if self.n_folds == 1 else None,
+                         require_firing=firing)
         reporter = Reporter(self.method, self.callback, [full])
         x = space.x0.copy()
         initial_fun = float(full(x[None])[0])
         if not math.isfinite(initial_fun):
-            raise ValueError(f"the starting system {self.system.name!r} cannot be scored on the data (some "
-                             "prediction is NaN: no rule fires under no_rule_fired = 'nan'); start from a "
-                             "system whose rules cover the data")
+            raise ValueError(f"the starting system {self.system.name!r} cannot be scored on the data: for some "
+                             "sample no rule fires" + (" (require_firing is set)" if firing else
+                                                       " and no_rule_fired is 'nan'")
+                             + "; start from a system whose rules cover the data")
         cv_scores, fold_nit, statuses, reasons = [], [], [], []
         if self.n_folds == 1:
             x, status, reason = self._search(full, x, rng, None, reporter)
@@ -158,9 +184,9 @@ class Tuner:
             for fold in range(self.n_folds):
                 reporter.fold = fold + 1
                 held = labels == fold
-                train = Objective(space, X[~held], Y[~held], self.metric, expected_evaluations=expected)
-                stopping = EarlyStopping(Objective(space, X[held], Y[held], self.metric,
-                                                   expected_evaluations=expected),
+                train = Objective(space, X[~held], Y[~held], self.metric, expected_evaluations=expected,
+                                  require_firing=firing)
+                stopping = EarlyStopping(Objective(space, X[held], Y[held], self.metric, require_firing=firing),
                                          self.validation_tol, self.validation_window)
                 reporter.objectives += [train, stopping.objective]
                 stopping.update(x)
@@ -189,7 +215,7 @@ class Tuner:
     def _settings(self) -> dict:
         return {k: v for k, v in self.get_params().items() if k not in ("system", "callback", "seed")}
 
-    def _provenance(self, system, result: OptimizeResult):
+    def _provenance(self, system, result: OptimizeResult, **extra):
         """``system`` with a description and ``metadata["tuning"]`` saying how it was made."""
         tuning = {
             "method": self.method,
@@ -198,9 +224,9 @@ class Tuner:
             "settings": self._settings(),
             "data": {"n_samples": result.n_samples, "n_groups": result.n_groups},
             "metric": result.metric,
-            "score": {"initial": result.initial_fun, "final": result.fun,
-                      "cv_folds": result.cv_scores, "cv_mean": None if math.isnan(result.cv_score) else result.cv_score},
-            "nit": result.nit, "nfev": result.nfev, "message": result.message,
+            "score": {"initial": result.initial_fun, "final": result.fun, "cv_folds": result.cv_scores,
+                      "cv_mean": None if math.isnan(result.cv_score) else result.cv_score},
+            "nit": result.nit, "nfev": result.nfev, "message": result.message, **extra,
         }
         description = (f"{self.system.description + '; ' if self.system.description else ''}"
                        f"{self.method} (seed {self.seed}) on {result.n_samples} samples: "

@@ -7,13 +7,15 @@ packed system and evaluated by the engine's own kernel, in parallel
 
 Two exact shortcuts give the same numbers with fewer inferences:
 
+- **Distinct rows**: each distinct input row is evaluated once (feature tables repeat
+  rows: every frame where nothing matched has IoU~ = 0, RDD~ = 1).
 - **Base point** (``objective(P, base=x)``): a candidate that differs from ``x`` in a few
-  parameters can change only some samples' predictions: those whose input falls where a
+  parameters can change only some rows' predictions: those whose input falls where a
   moved membership function changed, or whose firing rules conclude a moved output term
   or a changed consequent (:meth:`TermSpace.changes`, :meth:`RuleSpace.changes`). Only
-  those samples are re-evaluated; the others keep ``x``'s losses, and the sum runs in the
-  kernels' canonical order, so the value is bit for bit the full evaluation's. Pattern
-  search polls (one parameter moved at a time) use it.
+  those rows are re-evaluated; the others keep ``x``'s predictions, and the sum runs in
+  the kernels' canonical order, so the value is bit for bit the full evaluation's.
+  Pattern search polls (one parameter moved at a time) use it.
 - **Rule tables** (rule spaces): a sample's output depends only on the consequents of the
   rules that fire for it, so each group of samples with the same firing rules is scored
   once per combination of their consequents (:mod:`fuzzcore.tune.rule_tables`), and a
@@ -24,13 +26,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _kernels as K
 from . import _objective_kernels as KO
-from .batch import full_sums, sample_losses, subset_sums
+from .batch import Samples, full_sums, predictions, subset_sums
 from .data import check_data
 from .rule_space import RuleSpace
 from .rule_tables import RuleTables, firing_strengths, group_by_firing
 
 METRICS = {"rmse": KO.LOSS_SQUARED, "mae": KO.LOSS_ABSOLUTE}
+#: slot of the no-rule-fired policy in the header of ``iblob`` (:mod:`fuzzcore.compiled`)
+POLICY = 6
 
 
 class Objective:
@@ -49,9 +54,16 @@ class Objective:
         How many candidates the caller expects to score. For a rule space, the exact
         lookup tables are built (at the first call) when they cost fewer inferences
         than that many direct evaluations.
+    require_firing : bool
+        Score a candidate ``inf`` if, for some sample, no rule fires (the candidate's
+        ``no_rule_fired`` fallback would answer instead of its rules). Tuners set it so
+        that no search wins by moving terms away from the data and letting the fallback
+        (MATLAB's midpoint of the output range) predict.
 
     Attributes
     ----------
+    data : Samples
+        The data, with its distinct input rows.
     nfev : int
         Candidates scored so far (feasible or not).
 
@@ -60,32 +72,36 @@ class Objective:
     ``objective(P)`` with ``P`` of shape (n_candidates, n_params) returns shape
     (n_candidates,): the metric, or ``inf`` for a candidate that violates the space's
     constraints or whose system gives NaN for some sample (no rule fired under
-    ``no_rule_fired: nan``). ``inf`` is never better than anything, so no tuner can
-    choose such a candidate.
+    ``no_rule_fired: nan``, or under ``require_firing``). ``inf`` is never better than
+    anything, so no tuner can choose such a candidate.
     """
 
-    def __init__(self, space, X, y, metric: str = "rmse", expected_evaluations: int | None = None):
+    def __init__(self, space, X, y, metric: str = "rmse", expected_evaluations: int | None = None,
+                 require_firing: bool = False):
         if metric not in METRICS:
             raise ValueError(f"metric {metric!r}: expected one of {', '.join(METRICS)}")
         self.space = space
-        self.X, self.Y, _ = check_data(space.system, X, y)
+        fblob, iblob, _ = space.system.packed
+        if require_firing:
+            iblob[POLICY] = K.P_NAN
+        self._packed = (fblob, iblob)
+        X, Y, _ = check_data(space.system, X, y)
+        self.data = Samples.of(X, Y)
         self.metric = metric
         self.nfev = 0
         self._loss = METRICS[metric]
         self._tables = None
         self._want_tables = False
         if isinstance(space, RuleSpace) and expected_evaluations is not None:
-            cost = group_by_firing(space, self.X).cost
-            self._want_tables = cost is not None and cost < expected_evaluations * self.X.shape[0]
-        self._order = np.argsort(self.X, axis=0, kind="stable")       # per input
-        self._sorted = np.take_along_axis(self.X, self._order, axis=0)
-        self._base = None        # the base point whose per-sample losses are cached
-        self._base_loss = None
-        self._users = None       # {("rule", r) or ("output_term", o, k): samples}, at the base
-
-    @property
-    def n_samples(self) -> int:
-        return self.X.shape[0]
+            cost = group_by_firing(space, self.data).cost
+            self._want_tables = cost is not None and cost < expected_evaluations * self.data.unique.shape[0]
+        U = self.data.unique
+        self._order = np.argsort(U, axis=0, kind="stable")  # distinct rows sorted, per input
+        self._sorted = np.take_along_axis(U, self._order, axis=0)
+        self._base = None        # the base point whose predictions are cached
+        self._base_pred = None
+        self._fires = None       # (m, n_rules) bool: which rules fire at each distinct row, at the base
+        self._users = {}         # {("rule", r) or ("output_term", o, k): rows}, at the base
 
     def __call__(self, P, base=None) -> np.ndarray:
         """Score candidate rows ``P`` (n_candidates, n_params) -> (n_candidates,).
@@ -107,16 +123,16 @@ class Objective:
             return out
         good = np.ascontiguousarray(P[ok])
         if self._want_tables and self._tables is None:
-            self._tables = RuleTables(self.space, self.X, self.Y, self._loss)
+            self._tables = RuleTables(self.space, self._packed, self.data, self._loss)
         if self._tables is not None:
             sums = self._tables.sums(good)
         elif base is not None:
             self._use_base(np.asarray(base, dtype=np.float64))
-            subsets = [self._affected(p) for p in good]
-            sums = subset_sums(self.space, self.X, self.Y, good, self._loss, self._base_loss, subsets)
+            rows = [self._affected(p) for p in good]
+            sums = subset_sums(self.space, self._packed, self.data, good, self._loss, self._base_pred, rows)
         else:
-            sums = full_sums(self.space, self.X, self.Y, good, self._loss)
-        value = sums / self.Y.size
+            sums = full_sums(self.space, self._packed, self.data, good, self._loss)
+        value = sums / self.data.Y.size
         if self.metric == "rmse":
             value = np.sqrt(value)
         out[ok] = np.where(np.isfinite(value), value, np.inf)
@@ -129,39 +145,39 @@ class Objective:
         if base.shape != (self.space.n_params,) or not self.space.feasible(base[None])[0]:
             raise ValueError(f"base must be a feasible point of shape ({self.space.n_params},)")
         self._base = base.copy()
-        self._base_loss = sample_losses(self.space, self.X, self.Y, base, self._loss)
-        self._users = None
+        self._base_pred = predictions(self.space, self._packed, self.data, base)
+        self._fires = None
+        self._users = {}
 
-    def _samples_using(self, key: tuple) -> np.ndarray:
-        """Samples where a rule concluding ``key``'s term, or ``key``'s rule, fires at the base."""
-        if self._users is None:
-            system = self.space.to_system(self._base) if not isinstance(self.space, RuleSpace) \
-                else self.space.system
-            fires = firing_strengths(system, self.X) > 0.0
-            self._users = {"fires": fires, "system": system}
+    def _rows_using(self, key: tuple) -> np.ndarray:
+        """Distinct rows where ``key``'s rule, or a rule concluding ``key``'s output term, fires at the base."""
         if key not in self._users:
-            fires, system = self._users["fires"], self._users["system"]
+            if self._fires is None:  # firing depends on the input terms only: the base's, for a term space
+                system = self.space.system if isinstance(self.space, RuleSpace) else self.space.to_system(self._base)
+                self._fires = firing_strengths(system, self.data.unique) > 0.0
             if key[0] == "rule":
-                self._users[key] = np.flatnonzero(fires[:, key[1]])
+                rules = [key[1]]
             else:
                 _, o, k = key
-                concluding = [r for r, rule in enumerate(system.rules) if abs(rule.consequent[o]) == k + 1]
-                self._users[key] = np.flatnonzero(fires[:, concluding].any(axis=1))
+                rules = [r for r, rule in enumerate(self.space.system.rules) if abs(rule.consequent[o]) == k + 1]
+            self._users[key] = np.flatnonzero(self._fires[:, rules].any(axis=1))
         return self._users[key]
 
     def _affected(self, p: np.ndarray) -> np.ndarray:
-        """Sorted samples whose prediction can differ between the base and ``p``."""
+        """Distinct rows (sorted) whose prediction can differ between the base and ``p``."""
         parts = []
         for change in self.space.changes(self._base, p):
             if change[0] == "input":
-                return np.arange(self.n_samples)
+                return np.arange(self.data.unique.shape[0])
             if change[0] == "interval":
                 _, v, lo, hi = change
                 column = self._sorted[:, v]
                 a, b = np.searchsorted(column, lo, "left"), np.searchsorted(column, hi, "right")
                 parts.append(self._order[a:b, v])
             else:
-                parts.append(self._samples_using(change))
+                parts.append(self._rows_using(change))
         if not parts:
             return np.empty(0, dtype=np.int64)
+        if len(parts) == 1:
+            return np.sort(parts[0])
         return np.unique(np.concatenate(parts))

@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from .base import CALLBACK_STOP, CONVERGED, MAX_ITER, Tuner, check_number
+from .base import CALLBACK_STOP, CONVERGED, MAX_ITER, Tuner, check_number, stalled, stop_reason
 from .rule_space import RuleSpace
 
 
@@ -47,6 +47,9 @@ class ParticleSwarm(Tuner):
         0-based indices of the rules whose consequents are learned (default all).
     allow_off : bool
         Whether a rule may be switched off (consequent 0, removed from the result).
+    require_firing : bool
+        Never choose a candidate under which some training sample fires no rule
+        (:mod:`fuzzcore.tune.base`).
     metric : {"rmse", "mae"}
     swarm_size : int
         Particles (MATLAB's ``SwarmSize``). Paper: 100.
@@ -76,13 +79,14 @@ class ParticleSwarm(Tuner):
 
     method = "particleswarm"
 
-    def __init__(self, system, *, rules=None, allow_off=False, metric="rmse", swarm_size=100, max_iter=20,
-                 inertia_range=(0.1, 1.1), self_weight=1.49, social_weight=1.49, min_neighbors_fraction=0.25,
-                 f_tol=1e-6, stall_iter=20, n_folds=1, validation_tol=0.1, validation_window=5, seed=None,
-                 callback=None):
+    def __init__(self, system, *, rules=None, allow_off=False, require_firing=True, metric="rmse", swarm_size=100,
+                 max_iter=20, inertia_range=(0.1, 1.1), self_weight=1.49, social_weight=1.49,
+                 min_neighbors_fraction=0.25, f_tol=1e-6, stall_iter=20, n_folds=1, validation_tol=0.1,
+                 validation_window=5, seed=None, callback=None):
         self.system = system
         self.rules = rules
         self.allow_off = allow_off
+        self.require_firing = require_firing
         self.metric = metric
         self.swarm_size = swarm_size
         self.max_iter = max_iter
@@ -170,10 +174,7 @@ class ParticleSwarm(Tuner):
             if reporter.iteration(x, best_f, inertia=W, neighbours=nb):
                 return x, CALLBACK_STOP, f"after {it + 1} iterations"
             if improved and stopping is not None and stopping.update(x):
-                return x, CONVERGED, (f"validation cost rose over {self.validation_tol:g} above its recent "
-                                      f"minimum after {it + 1} iterations")
-            if len(history) > self.stall_iter and \
-                    history[-1 - self.stall_iter] - best_f <= self.f_tol * max(1.0, abs(best_f)):
-                return x, CONVERGED, (f"relative improvement over the last {self.stall_iter} iterations "
-                                      f"below f_tol after {it + 1} iterations")
+                return x, CONVERGED, stop_reason("validation", self, it + 1)
+            if stalled(history, self.stall_iter, self.f_tol):
+                return x, CONVERGED, stop_reason("stall", self, it + 1)
         return space.round(best_x[None])[0], MAX_ITER, f"max_iter = {self.max_iter} iterations"

@@ -18,17 +18,21 @@ The algorithm is MATLAB's ``patternsearch`` as ``tunefis`` runs it (classic GPS)
   parameter can affect are re-evaluated, with the same result as a full evaluation.
 
 The search stops when the mesh falls below ``mesh_tol`` (MATLAB's ``MeshTolerance``),
-when the objective improved by less than ``f_tol`` relative (``|f_old - f| <= f_tol *
+when the objective improved by at most ``f_tol`` relative (``f_old - f <= f_tol *
 max(1, |f|)``) over the last ``stall_iter`` iterations (the stall test of MATLAB's
-``particleswarm``, used here so a run does not spend hundreds of polls refining a mesh
-that no longer pays), after ``max_iter`` iterations (per fold), or early on the
-validation fold (:mod:`fuzzcore.tune.kfold`).
+``particleswarm``), after ``max_iter`` iterations (per fold), or early on the
+validation fold (:mod:`fuzzcore.tune.kfold`). The stall test is there so a run does not
+spend thousands of polls refining a mesh that no longer pays. On feature tables of the
+synthetic benchmark (two benchmark seeds, 2,200-2,300 frames), ``f_tol = 1e-5`` (the
+default) needed 2x and 7x fewer evaluations than ``1e-6``; the tuned system was the same
+on one table and 0.25 % worse in held-out RMSE on the other (each fold's best point on
+its validation fold tends to come long before the training objective stalls).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .base import CALLBACK_STOP, CONVERGED, MAX_ITER, Tuner, check_number
+from .base import CALLBACK_STOP, CONVERGED, MAX_ITER, Tuner, check_number, stalled, stop_reason
 from .term_space import TermSpace
 
 EXPANSION, CONTRACTION = 2.0, 0.5
@@ -43,6 +47,12 @@ class PatternSearch(Tuner):
         The starting system; its rules are kept.
     variables : sequence of str, optional
         Variables whose terms are tuned (default: every input and output).
+    keep_order : bool
+        Keep each variable's terms in their starting order, so "low" stays left of
+        "medium" (:mod:`fuzzcore.tune.term_space`).
+    require_firing : bool
+        Never choose a candidate under which some training sample fires no rule
+        (:mod:`fuzzcore.tune.base`).
     metric : {"rmse", "mae"}
     n_folds : int
         Cross-validation folds (1: tune on all the data, no validation). Paper: 5.
@@ -82,11 +92,13 @@ class PatternSearch(Tuner):
 
     method = "patternsearch"
 
-    def __init__(self, system, *, variables=None, metric="rmse", n_folds=5, max_iter=1000,
-                 initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-6, stall_iter=20, complete_poll=False,
+    def __init__(self, system, *, variables=None, keep_order=True, require_firing=True, metric="rmse", n_folds=5,
+                 max_iter=1000, initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-5, stall_iter=20, complete_poll=False,
                  validation_tol=0.1, validation_window=5, seed=None, callback=None):
         self.system = system
         self.variables = variables
+        self.keep_order = keep_order
+        self.require_firing = require_firing
         self.metric = metric
         self.n_folds = n_folds
         self.max_iter = max_iter
@@ -106,11 +118,12 @@ class PatternSearch(Tuner):
         check_number("mesh_tol", self.mesh_tol, 0.0, low_open=True)
         check_number("f_tol", self.f_tol, 0.0)
         check_number("stall_iter", self.stall_iter, 1, integer=True)
-        if not isinstance(self.complete_poll, bool):
-            raise ValueError(f"complete_poll = {self.complete_poll!r}: expected True or False")
+        for name in ("complete_poll", "keep_order"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} = {getattr(self, name)!r}: expected True or False")
 
     def _space(self, system) -> TermSpace:
-        return TermSpace(system, self.variables)
+        return TermSpace(system, self.variables, self.keep_order)
 
     def _expected_evaluations(self):
         return None
@@ -143,12 +156,9 @@ class PatternSearch(Tuner):
             if reporter.iteration(x, f, mesh=mesh):
                 return x, CALLBACK_STOP, f"after {it + 1} iterations"
             if moved and stopping is not None and stopping.update(x):
-                return x, CONVERGED, (f"validation cost rose over {self.validation_tol:g} above its recent "
-                                      f"minimum after {it + 1} iterations")
+                return x, CONVERGED, stop_reason("validation", self, it + 1)
             if mesh < self.mesh_tol:
                 return x, CONVERGED, f"mesh size {mesh:.3g} below mesh_tol after {it + 1} iterations"
-            if len(history) > self.stall_iter and \
-                    history[-1 - self.stall_iter] - f <= self.f_tol * max(1.0, abs(f)):
-                return x, CONVERGED, (f"relative improvement over the last {self.stall_iter} iterations "
-                                      f"below f_tol after {it + 1} iterations")
+            if stalled(history, self.stall_iter, self.f_tol):
+                return x, CONVERGED, stop_reason("stall", self, it + 1)
         return x, MAX_ITER, f"max_iter = {self.max_iter} iterations"

@@ -23,7 +23,7 @@ import numpy as np
 from ..rules import Rule
 from ..system import FuzzySystem
 from ..variables import Term, Variable
-from .batch import full_sums
+from .batch import Samples, full_sums
 
 #: most consequent combinations tabulated for one group (beyond it, tables are not used)
 MAX_COMBINATIONS = 4096
@@ -57,11 +57,13 @@ class Grouping:
     """Samples grouped by which learned slots' rules fire.
 
     ``slots[g]`` are the slot indices whose rule fires for group ``g``; ``members[g]`` the
-    sample indices; ``sizes[g]`` the number of choices of each of those slots.
+    sample indices; ``n_rows[g]`` their distinct input rows; ``sizes[g]`` the number of
+    choices of each of those slots.
     """
 
     slots: tuple[np.ndarray, ...]
     members: tuple[np.ndarray, ...]
+    n_rows: tuple[int, ...]
     sizes: tuple[np.ndarray, ...]
 
     @property
@@ -70,23 +72,19 @@ class Grouping:
         combos = [int(np.prod(s)) for s in self.sizes]
         if max(combos) > MAX_COMBINATIONS:
             return None
-        return int(sum(c * m.shape[0] for c, m in zip(combos, self.members)))
+        return int(sum(c * m for c, m in zip(combos, self.n_rows)))
 
 
-def group_by_firing(space, X: np.ndarray) -> Grouping:
-    """Group the samples of ``X`` by the set of ``space``'s slots whose rule fires."""
-    fires = firing_strengths(space.system, X)[:, space.slots[:, 0]] > 0.0
+def group_by_firing(space, data: Samples) -> Grouping:
+    """Group the samples of ``data`` by the set of ``space``'s slots whose rule fires."""
+    fires = firing_strengths(space.system, data.unique)[:, space.slots[:, 0]] > 0.0
     keys, inverse = np.unique(fires, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
+    inverse = inverse.ravel()[data.inverse]
     choices = (space.upper - space.lower + 1).astype(np.int64)
     slots = tuple(np.flatnonzero(key) for key in keys)
     members = tuple(np.flatnonzero(inverse == g) for g in range(keys.shape[0]))
-    return Grouping(slots=slots, members=members, sizes=tuple(choices[s] for s in slots))
-
-
-def table_cost(space, X: np.ndarray) -> int | None:
-    """Inferences :class:`RuleTables` would spend on ``X`` (``None``: too many combinations)."""
-    return group_by_firing(space, X).cost
+    n_rows = tuple(int(np.unique(data.inverse[m]).shape[0]) for m in members)
+    return Grouping(slots=slots, members=members, n_rows=n_rows, sizes=tuple(choices[s] for s in slots))
 
 
 class RuleTables:
@@ -95,14 +93,15 @@ class RuleTables:
     Parameters
     ----------
     space : RuleSpace
-    X, Y : ndarray
-        Validated data (:func:`fuzzcore.tune.data.check_data`).
+    packed : (fblob, iblob)
+        The packed system the candidates modify (:mod:`fuzzcore.tune.batch`).
+    data : Samples
     loss : int
         Loss code (:mod:`fuzzcore.tune._objective_kernels`).
     """
 
-    def __init__(self, space, X: np.ndarray, Y: np.ndarray, loss: int):
-        grouping = group_by_firing(space, X)
+    def __init__(self, space, packed, data: Samples, loss: int):
+        grouping = group_by_firing(space, data)
         if grouping.cost is None:
             raise ValueError(f"a group of samples fires more than log2({MAX_COMBINATIONS}) learned rules' "
                              "worth of consequent combinations; score candidates directly")
@@ -111,13 +110,12 @@ class RuleTables:
         lower = space.lower.astype(np.int64)
         tables = []
         for slots, members, sizes in zip(grouping.slots, grouping.members, grouping.sizes):
-            combos = np.array(list(itertools.product(*[range(int(lower[s]), int(lower[s] + n))
-                                                       for s, n in zip(slots, sizes)])),
-                              dtype=np.float64).reshape(-1, slots.shape[0])
+            values = [range(int(lower[s]), int(lower[s] + n)) for s, n in zip(slots, sizes)]
+            combos = np.array(list(itertools.product(*values)), dtype=np.float64).reshape(
+                int(np.prod(sizes)), slots.shape[0])  # (1, 0) for a group where no learned rule fires
             P = np.tile(space.x0, (combos.shape[0], 1))
             P[:, slots] = combos
-            tables.append(full_sums(space, np.ascontiguousarray(X[members]),
-                                         np.ascontiguousarray(Y[members]), P, loss))
+            tables.append(full_sums(space, packed, data.take(members), P, loss))
         self.tables = tuple(tables)
 
     def sums(self, P: np.ndarray) -> np.ndarray:

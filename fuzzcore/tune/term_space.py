@@ -17,7 +17,12 @@ shape    a unitless exponent (gbellmf's b)               > 0                    
 =======  ==============================================  =======================  ========
 
 and the vertex kinds (trimf, trapmf, pimf, smf, zmf, linsmf, linzmf) keep their points
-in non-decreasing order with a positive width (first point < last point). A point that
+in non-decreasing order with a positive width (first point < last point). With
+``keep_order`` (the default), the terms of a variable also keep their order: each
+corner of a vertex term (left foot, left shoulder, right shoulder, right foot; a
+triangle's peak is both shoulders) stays on the side of the next term's same corner that
+it starts on, so "low" stays left of "medium" and the labels keep their meaning (the
+paper's tuned terms move but stay in order; without it a search may swap them). A point that
 starts outside its variable's range (MATLAB allows feet beyond the range) may stay
 anywhere between that start and the range. ``scale`` is what one unit of a tuner's step
 is worth: a pattern-search mesh of 0.01 moves a vertex by 1 % of its variable's range.
@@ -50,6 +55,13 @@ ROLES: dict[str, tuple[str, ...]] = {
 }
 #: kinds whose parameters are vertices: non-decreasing, first < last
 ORDERED = frozenset({"trimf", "trapmf", "linsmf", "linzmf", "smf", "zmf", "pimf"})
+#: the trapezoid corners (left foot, left shoulder, right shoulder, right foot) of the vertex
+#: kinds, as parameter indices; None where the corner is at -inf/+inf
+CORNERS = {
+    "trimf": (0, 1, 1, 2), "trapmf": (0, 1, 2, 3), "pimf": (0, 1, 2, 3),
+    "linsmf": (0, 1, None, None), "smf": (0, 1, None, None),
+    "linzmf": (None, None, 0, 1), "zmf": (None, None, 0, 1),
+}
 
 
 class TermSpace:
@@ -60,6 +72,8 @@ class TermSpace:
     system : FuzzySystem
     variables : sequence of str, optional
         Names of the variables whose terms are tuned; default every input and output.
+    keep_order : bool
+        Keep each variable's terms in the order they start in (module docstring).
 
     Attributes
     ----------
@@ -81,7 +95,7 @@ class TermSpace:
         Whether a candidate changes output terms (the output tables need recomputing).
     """
 
-    def __init__(self, system, variables: Sequence[str] | None = None):
+    def __init__(self, system, variables: Sequence[str] | None = None, keep_order: bool = True):
         all_vars = [("inputs", i, v) for i, v in enumerate(system.inputs)] + \
                    [("outputs", o, v) for o, v in enumerate(system.outputs)]
         known = [v.name for _, _, v in all_vars]
@@ -101,11 +115,13 @@ class TermSpace:
 
         names, x0, scale, lower, upper, strict, positions = [], [], [], [], [], [], []
         chains = []  # parameter index lists that must be non-decreasing with first < last
+        pairs = []   # (i, j): P[:, i] <= P[:, j]
         terms = []  # (first, end, "inputs"/"outputs", variable index, term index k, ordered kind?)
         refresh = False
         flat = 0  # flat input-term index
         for kind_of_var, index, var in all_vars:
             tuned = var.name in chosen
+            previous = None  # (first parameter index, kind) of the previous term of this variable
             for k, term in enumerate(var.terms):
                 if kind_of_var == "inputs":
                     base = in_start + flat * 4
@@ -145,6 +161,12 @@ class TermSpace:
                                              f"parameter {j + 1} ({role}) is {value:g}; tuning keeps it > 0, "
                                              "so it must start > 0")
                 terms.append((first, len(names), kind_of_var, index, k, kind in ORDERED))
+                if keep_order and previous is not None and kind in ORDERED and previous[1] in ORDERED:
+                    for a, b in zip(CORNERS[previous[1]], CORNERS[kind]):
+                        if a is not None and b is not None:
+                            i, j = previous[0] + a, first + b
+                            pairs.append((i, j) if x0[i] <= x0[j] else (j, i))
+                previous = (first, kind)
                 if kind in ORDERED:
                     chain = list(range(first, len(names)))
                     if not term.params[0] < term.params[-1]:
@@ -163,7 +185,12 @@ class TermSpace:
         self.lower = np.array(lower, dtype=np.float64)
         self.upper = np.array(upper, dtype=np.float64)
         self._strict = np.array(strict, dtype=bool)
-        self._chains = chains
+        pairs += [(a, b) for chain in chains for a, b in zip(chain, chain[1:])]
+        self.keep_order = bool(keep_order)
+        self._left = np.array([a for a, _ in pairs], dtype=np.int64)   # P[:, left] <= P[:, right]
+        self._right = np.array([b for _, b in pairs], dtype=np.int64)
+        self._first = np.array([c[0] for c in chains], dtype=np.int64)  # P[:, first] < P[:, last]
+        self._last = np.array([c[-1] for c in chains], dtype=np.int64)
         self._terms = terms
         self._term_of = np.repeat(np.arange(len(terms)), [end - first for first, end, *_ in terms])
         self.f_positions = np.array(positions, dtype=np.int64)
@@ -189,9 +216,8 @@ class TermSpace:
         with np.errstate(invalid="ignore"):
             ok &= (P <= self.upper).all(axis=1)
             ok &= np.where(self._strict, P > self.lower, P >= self.lower).all(axis=1)
-            for chain in self._chains:
-                V = P[:, chain]
-                ok &= (np.diff(V, axis=1) >= 0).all(axis=1) & (V[:, 0] < V[:, -1])
+            ok &= (P[:, self._left] <= P[:, self._right]).all(axis=1)
+            ok &= (P[:, self._first] < P[:, self._last]).all(axis=1)
         return ok
 
     def changes(self, base: np.ndarray, p: np.ndarray) -> list[tuple]:
