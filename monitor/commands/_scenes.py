@@ -1,7 +1,8 @@
 """Scene selection shared by ``fuzzrisk eval`` and ``fuzzrisk features``.
 
-Either the built-in synthetic benchmark (:mod:`monitor.benchmark`; the default) or scene
-folders on disk (:mod:`monitor.frames` format) with a prior file.
+Either the built-in synthetic benchmark (:mod:`monitor.benchmark`; the default), scene
+folders on disk (:mod:`monitor.frames` format) or nuScenes (:mod:`monitor.nuscenes`: its
+tables, a detection-results file and depth maps), the last two with a prior file.
 """
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import numpy as np
 
 from monitor.benchmark import SYNTHETIC_NOTE, Benchmark
 from monitor.camera import Camera
-from monitor.frames import SceneReader
+from monitor.frames import SceneReader, _same_camera
+from monitor.nuscenes import NuScenesReader
 from monitor.prior import load_prior
 from monitor.synthetic import CONDITIONS
 
@@ -63,14 +65,27 @@ def add_scene_arguments(parser: argparse.ArgumentParser, *, default_scenes: int,
     group.add_argument("--scene-dir", nargs="+", default=None, metavar="DIR",
                        help="scene folders on disk instead (monitor.frames format); needs --prior")
     group.add_argument("--prior", default=None, metavar="PRIOR.npy",
-                       help="inverse-depth prior for --scene-dir (see 'fuzzrisk prior build')")
+                       help="inverse-depth prior for --scene-dir or --nuscenes (see 'fuzzrisk prior build')")
+    nus = parser.add_argument_group("nuScenes instead (needs --prior, --detections and --depth-dir)")
+    nus.add_argument("--nuscenes", default=None, metavar="DATAROOT", help="the nuScenes root folder")
+    nus.add_argument("--version", default="v1.0-trainval", help="tables folder under DATAROOT (default %(default)s)")
+    nus.add_argument("--detections", default=None, metavar="RESULTS.json",
+                     help="3D detections in the nuScenes detection-results format; its samples select the scenes")
+    nus.add_argument("--depth-dir", default=None, metavar="DIR",
+                     help="depth maps (.npy metres or 16-bit .png) named by the camera image's file stem")
+    nus.add_argument("--camera", default="CAM_FRONT", help="camera channel (default %(default)s)")
+    nus.add_argument("--nuscenes-scenes", nargs="+", default=None, metavar="NAME",
+                     help="only these scenes (default: all the detections cover)")
 
 
 def select_scenes(args: argparse.Namespace, split: str | None, progress=None) -> Selection:
     """The scenes of ``split`` ("train", "test" or None for all): synthetic or from disk.
 
-    Scenes on disk have no train/test split of their own: all of them are used.
+    Scenes on disk and nuScenes scenes have no train/test split of their own: all of them
+    are used.
     """
+    if args.nuscenes is not None:
+        return _select_nuscenes(args)
     if args.scene_dir:
         if args.prior is None:
             raise ValueError("--scene-dir needs --prior PRIOR.npy (build one with 'fuzzrisk prior build')")
@@ -91,9 +106,32 @@ def select_scenes(args: argparse.Namespace, split: str | None, progress=None) ->
     return Selection(bench.prior(progress), bench.camera, bench.scenes(split), note)
 
 
-def count_frames(args: argparse.Namespace, split: str | None) -> int | None:
-    """Frames a progress bar will see (None when unknown: scenes on disk)."""
+def _select_nuscenes(args: argparse.Namespace) -> Selection:
     if args.scene_dir:
+        raise ValueError("--scene-dir and --nuscenes are alternatives; give one")
+    missing = [flag for flag, value in (("--prior PRIOR.npy", args.prior), ("--detections RESULTS.json",
+               args.detections), ("--depth-dir DIR", args.depth_dir)) if value is None]
+    if missing:
+        raise ValueError(f"--nuscenes needs {', '.join(missing)}")
+    reader = NuScenesReader(args.nuscenes, args.version, detections=args.detections, depth=args.depth_dir,
+                            camera=args.camera, scene_names=args.nuscenes_scenes)
+    scenes = reader.scenes()
+    if not scenes:
+        raise ValueError(f"{args.detections} covers no scene of nuScenes {args.version} at {args.nuscenes}")
+    camera = scenes[0].camera
+    other = next((s for s in scenes if not _same_camera(s.camera, camera)), None)
+    if other is not None:
+        raise ValueError(f"nuScenes scenes {scenes[0].name!r} and {other.name!r} have different {args.camera} "
+                         "calibrations and the monitor has one camera; run them apart (--nuscenes-scenes)")
+    note = (f"Data: nuScenes {args.version} at {args.nuscenes}, {args.camera}, {len(scenes)} scenes "
+            f"({len(reader.uncovered_scenes)} more not in the detections); detections: {args.detections}; "
+            f"depth: {args.depth_dir}; prior: {args.prior}.")
+    return Selection(load_prior(args.prior), camera, scenes, note)
+
+
+def count_frames(args: argparse.Namespace, split: str | None) -> int | None:
+    """Frames a progress bar will see (None when unknown: scenes on disk, nuScenes)."""
+    if args.scene_dir or args.nuscenes is not None:
         return None
     per_split = {"test": args.test_scenes, "train": args.scenes - args.test_scenes, None: args.scenes}[split]
     return (len(args.conditions) * per_split + args.prior_scenes) * args.frames
