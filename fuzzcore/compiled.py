@@ -1,20 +1,31 @@
 """Packing a fuzzy system into the two flat arrays the Numba kernels read.
 
 Two arrays cross into compiled code, so a call costs two argument conversions, not twenty.
+Kernels index them at offsets kept in ``iblob``'s header (names in :mod:`fuzzcore._kernels`):
+making a view per part would cost reference counting on every call.
 
 ``iblob`` (int64)::
 
     [0] system  [1] and  [2] or  [3] implication  [4] aggregation  [5] defuzzifier
     [6] no-rule policy  [7] n_in  [8] n_out  [9] T (input terms)  [10] R (rules)
     [11] K (most terms of one output)  [12] P (output parameter width)  [13] resolution
-    then in_kind (T) | in_var (T) | antecedent (R*n_in) | consequent (R*n_out) |
-         rule_or (R) | out_kind (n_out*K, -1 where an output has fewer terms) |
-         support (n_out*K*2: first and one-past-last grid index where the term is > 0)
+    [14:21] where each iblob part starts, [21:27] where each fblob part starts,
+    [27:35] the work array's lane rows, [35:45] its per-sample scratch (see below), then
+    in_kind (T) | in_var (T) | antecedent (R*n_in) | consequent (R*n_out) |
+    rule_or (R) | out_kind (n_out*K, -1 where an output has fewer terms) |
+    support (n_out*K*2: first and one-past-last grid index where the term is > 0)
 
 ``fblob`` (float64)::
 
     [0] no-rule value, then in_params (T*4) | rule weights (R) | out_range (n_out*2) |
     out_params (n_out*K*P) | grid (n_out*res) | term table on the grid (n_out*K*res)
+
+Work array (float64, one per thread): rows of B lanes, one lane per sample of a block --
+inputs (n_in rows) | memberships (T) | rule strengths (R) | max-aggregation levels (2K: a
+term, then its NOT) | one aggregated grid row | centroid numerator | denominator |
+outputs (n_out) -- then per-sample scratch: the fired sets' level rows, codes and grid
+stretches (S each), one sample's aggregated set (res), one sample's set codes and levels
+(S each), exact-centroid breakpoints and sub-breakpoints; S = max(2K, R).
 
 Antecedent entries are 0 (don't care) or +-(flat input-term index + 1); consequent
 entries are 0 or +-(term index within the output + 1); negative means NOT.
@@ -41,9 +52,6 @@ MAMDANI_DEFUZZIFIERS = {
 }
 SUGENO_DEFUZZIFIERS = {"wtaver": K.D_WTAVER, "wtsum": K.D_WTSUM}
 POLICIES = {"midpoint": K.P_MIDPOINT, "nan": K.P_NAN}  # a number means P_VALUE
-
-HEADER = 14
-
 
 @dataclass(frozen=True)
 class Layout:
@@ -111,22 +119,27 @@ def pack(system) -> tuple[np.ndarray, np.ndarray, Layout]:
         np.zeros(n_out * res),
         np.zeros(n_out * Kmax * res),
     ]
-    parts_i = [np.array(header), np.array(in_kind), np.array(in_var), ante.ravel(), cons.ravel(),
+    parts_i = [np.array(in_kind), np.array(in_var), ante.ravel(), cons.ravel(),
                np.array(rule_or), out_kind.ravel(), np.zeros(n_out * Kmax * 2)]
+    i_starts = K.HEADER + np.cumsum([0] + [len(p) for p in parts_i])
+    f_starts = np.cumsum([0] + [len(p) for p in parts_f])
+    n_sets = max(2 * Kmax, R)
+    rows = [n_in, T, R, 2 * Kmax, 1, 1, 1, n_out]  # inputs | mu | fire | level | row | num | den | y
+    tail = [n_sets] * 4 + [max(res, 1), n_sets, n_sets, 2 + 6 * n_sets, n_sets * (n_sets - 1) // 2 + 2]
+    header = np.concatenate([header, i_starts[:-1], f_starts[1:-1], np.cumsum(rows),
+                             np.cumsum([0] + tail)])  # K.HEADER long
     fblob = np.concatenate(parts_f).astype(np.float64)
-    iblob = np.concatenate([p.astype(np.int64) for p in parts_i])
+    iblob = np.concatenate([p.astype(np.int64) for p in [header] + parts_i])
     K.refresh_tables(fblob, iblob)
 
-    f_edges = np.cumsum([len(p) for p in parts_f])
-    i_edges = np.cumsum([len(p) for p in parts_i])
     layout = Layout(
         n_in=n_in, n_out=n_out, n_terms_in=T, n_rules=R, max_terms_out=Kmax, out_param_width=P,
         resolution=res,
-        in_params=slice(f_edges[0], f_edges[1]),
-        rule_weights=slice(f_edges[1], f_edges[2]),
-        out_range=slice(f_edges[2], f_edges[3]),
-        out_params=slice(f_edges[3], f_edges[4]),
-        antecedent=slice(i_edges[2], i_edges[3]),
-        consequent=slice(i_edges[3], i_edges[4]),
+        in_params=slice(int(f_starts[1]), int(f_starts[2])),
+        rule_weights=slice(int(f_starts[2]), int(f_starts[3])),
+        out_range=slice(int(f_starts[3]), int(f_starts[4])),
+        out_params=slice(int(f_starts[4]), int(f_starts[5])),
+        antecedent=slice(int(i_starts[2]), int(i_starts[3])),
+        consequent=slice(int(i_starts[3]), int(i_starts[4])),
     )
     return fblob, iblob, layout

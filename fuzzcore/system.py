@@ -204,6 +204,9 @@ class FuzzySystem:
                             f"got {len(args)}")
         return list(args)
 
+    #: inputs the bound scalar kernel takes (set by _bind_fast; -1: not bound, or several outputs)
+    _fast_arity = -1
+
     def infer(self, *args: Any, **kwargs: Any):
         """Evaluate the system.
 
@@ -212,11 +215,16 @@ class FuzzySystem:
         ndarray of shape (n_out,); arrays broadcast against each other and give an ndarray
         of the broadcast shape (single output) or broadcast shape + (n_out,).
         """
-        if (not kwargs and len(self.outputs) == 1 and len(args) == len(self.inputs)
-                and all(type(a) is float for a in args)):
-            fast = self._fast if self._fast is not None else self._bind_fast()
-            return fast(args, self._fblob, self._iblob)
+        if not kwargs and len(args) == self._fast_arity:
+            for a in args:  # the compiled scalar path takes Python floats (a loop: no generator)
+                if type(a) is not float:
+                    break
+            else:
+                return self._fast(args, self._fblob, self._iblob)
         values = self._inputs(args, kwargs)
+        if len(self.outputs) == 1 and all(type(v) is float for v in values):
+            fast = self._fast if self._fast is not None else self._bind_fast()
+            return fast(tuple(values), self._fblob, self._iblob)
         arrays = []
         for name, value in zip(self.input_names, values):
             try:
@@ -316,7 +324,15 @@ class FuzzySystem:
         signature = (numba.typeof(args), numba.typeof(self._fblob), numba.typeof(self._iblob))
         fast = K.infer_one.overloads[signature].entry_point
         object.__setattr__(self, "_fast", fast)
+        object.__setattr__(self, "_fast_arity", len(self.inputs) if len(self.outputs) == 1 else -1)
         return fast
+
+    def __getstate__(self):
+        # the bound scalar kernel is a compiled function, which cannot be pickled: rebound on use
+        state = dict(self.__dict__)
+        state["_fast"] = None
+        state.pop("_fast_arity", None)
+        return state
 
     def save(self, path) -> None:
         """Write the system to ``path``; the format follows the extension (see :func:`fuzzcore.save`)."""

@@ -152,7 +152,7 @@ class _Reader:
     def variables(self, data: _Map, key: str) -> tuple[Variable, ...]:
         spec = data[key]
         if not isinstance(spec, dict) or not spec:
-            raise self.error(f"expected a non-empty mapping of variable name: {{range, terms}}", key, data, key)
+            raise self.error("expected a non-empty mapping of variable name: {range, terms}", key, data, key)
         return tuple(self.variable(name, value, f"{key}.{name}", spec) for name, value in spec.items())
 
     def system(self, data: Any) -> FuzzySystem:
