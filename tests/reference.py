@@ -88,12 +88,13 @@ def membership(kind: str, p, x) -> np.ndarray:
         return _zmf(p[0], p[1], x)
     if kind == "pimf":
         return _smf(p[0], p[1], x) * _zmf(p[2], p[3], x)
-    if kind == "linsmf":
-        a, b = p
-        return np.where(x < a, 0.0, np.where(x >= b, 1.0, (x - a) / (b - a if b != a else 1.0)))
-    if kind == "linzmf":
-        a, b = p
-        return np.where(x <= a, 1.0, np.where(x > b, 0.0, (b - x) / (b - a if b != a else 1.0)))
+    with np.errstate(over="ignore", invalid="ignore"):  # np.where computes the unused branch too
+        if kind == "linsmf":
+            a, b = p
+            return np.where(x < a, 0.0, np.where(x >= b, 1.0, (x - a) / (b - a if b != a else 1.0)))
+        if kind == "linzmf":
+            a, b = p
+            return np.where(x <= a, 1.0, np.where(x > b, 0.0, (b - x) / (b - a if b != a else 1.0)))
     raise ValueError(kind)
 
 
