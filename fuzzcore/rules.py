@@ -142,10 +142,12 @@ def _split(words: list[str], connective: str, where: str) -> list[list[str]]:
     return clauses
 
 
-def format_rule(rule: Rule, inputs: Sequence[Variable], outputs: Sequence[Variable]) -> str:
+def format_rule(rule: Rule, inputs: Sequence[Variable], outputs: Sequence[Variable],
+                display: bool = False) -> str:
     """The text form of ``rule`` (weight not included). Inverse of :func:`parse_rule`.
 
-    A rule whose antecedent is all "don't care" has no text form and raises.
+    A rule whose antecedent is all "don't care" has no text form and raises, unless
+    ``display`` asks for a description to show (``always then ...``), which is not parseable.
     """
     def clauses(indices: Sequence[int], variables: Sequence[Variable]) -> list[str]:
         out = []
@@ -156,7 +158,9 @@ def format_rule(rule: Rule, inputs: Sequence[Variable], outputs: Sequence[Variab
         return out
 
     condition = clauses(rule.antecedent, inputs)
+    conclusion = " and ".join(clauses(rule.consequent, outputs))
     if not condition:
+        if display:
+            return f"always then {conclusion}"
         raise RuleBaseError("a rule with every input 'don't care' has no text form")
-    return (f"if {f' {rule.connective} '.join(condition)} then "
-            f"{' and '.join(clauses(rule.consequent, outputs))}")
+    return f"if {f' {rule.connective} '.join(condition)} then {conclusion}"

@@ -6,6 +6,7 @@ weighted rule outputs (Sugeno); defuzzification.
 """
 from __future__ import annotations
 
+import functools
 import math
 import numbers
 from dataclasses import dataclass, field
@@ -184,8 +185,25 @@ class FuzzySystem:
         return self._fblob.copy(), self._iblob.copy(), self._layout
 
     def rule_text(self, index: int) -> str:
-        """The readable text of rule ``index`` (0-based)."""
-        return format_rule(self.rules[index], self.inputs, self.outputs)
+        """The readable text of rule ``index`` (0-based), as :meth:`explain` reports it.
+
+        A rule whose every input is "don't care" (possible in MATLAB files) has no text
+        form in a rule base; it reads ``always then ...`` here.
+        """
+        return self._rule_texts[index]
+
+    @functools.cached_property
+    def _rule_texts(self) -> tuple[str, ...]:
+        return tuple(format_rule(rule, self.inputs, self.outputs, display=True) for rule in self.rules)
+
+    @property
+    def output_grid(self) -> np.ndarray | None:
+        """(n_outputs, resolution) the grid the Mamdani defuzzifiers sample (MATLAB's
+        ``linspace``, as the kernels computed it); None for Sugeno."""
+        if self.type != "mamdani":
+            return None
+        start, res = self._iblob[K.F_GRID], self._layout.resolution
+        return self._fblob[start:start + len(self.outputs) * res].reshape(len(self.outputs), res).copy()
 
     # ------------------------------------------------------------------ inference
     def _inputs(self, args: Sequence[Any], kwargs: Mapping[str, Any]) -> list[Any]:
@@ -287,16 +305,13 @@ class FuzzySystem:
         for var in self.inputs:
             memberships[var.name] = {term.name: float(mu[t + k]) for k, term in enumerate(var.terms)}
             t += len(var.terms)
-        grid = None
-        if self.type == "mamdani":
-            grid = np.array([np.linspace(*v.range, res) for v in self.outputs])
         return Explanation(
             inputs=dict(zip(self.input_names, x.tolist())),
             memberships=memberships,
-            rules=tuple(self.rule_text(r) for r in range(len(self.rules))),
+            rules=self._rule_texts,
             strengths=fire,
             outputs=dict(zip(self.output_names, out.tolist())),
-            grid=grid,
+            grid=self.output_grid,
             aggregated=agg if self.type == "mamdani" else None,
         )
 
@@ -360,8 +375,9 @@ class Explanation:
 
     def fired(self) -> list[tuple[int, str, float]]:
         """Rules with a positive strength, strongest first: (index, text, strength)."""
-        order = np.argsort(-self.strengths, kind="stable")
-        return [(int(r), self.rules[r], float(self.strengths[r])) for r in order if self.strengths[r] > 0]
+        strengths = self.strengths.tolist()
+        order = sorted((r for r, v in enumerate(strengths) if v > 0), key=lambda r: -strengths[r])
+        return [(r, self.rules[r], strengths[r]) for r in order]
 
     def __str__(self) -> str:
         lines = ["inputs: " + ", ".join(f"{k} = {v:g}" for k, v in self.inputs.items())]

@@ -185,8 +185,11 @@ class RiskMonitor:
                               S=S, P=P, alignment=alignment, timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
-        risk = self.fis.infer(*args)
-        fired = self.fis.explain(*args).fired() if self.explain else []
+        if self.explain:  # one inference either way: the explanation carries the output
+            explanation = self.fis.explain(*args)
+            risk, fired = explanation.outputs[self.fis.output_names[0]], explanation.fired()
+        else:
+            risk, fired = self.fis.infer(*args), []
         timings["inference"] = time.perf_counter() - t3
         if not np.isfinite(risk):
             return self._invalid(f"the rule base gave {risk} for IoU~ = {iou}, RDD~ = {rdd}", timings,

@@ -168,3 +168,15 @@ def test_min_max_clipping_is_not_monotone_preserving():
     at_knot, between = fis.infer(0.0), fis.infer(0.25)
     # o0 = trimf [0 0 0.25] clipped at 1 vs at 0.5 (on the 101-point grid): different centroids
     assert at_knot != pytest.approx(between, abs=1e-6)
+
+
+def test_explain_reports_the_kernels_grid_and_describes_rules_without_inputs():
+    # a MATLAB file may hold a rule with every input "don't care" (it always fires fully)
+    x = Variable("x", (0, 1), (Term("low", "trimf", (0, 0, 1)),))
+    y = Variable("y", (0, 3), (Term("a", "trimf", (0, 1, 2)),))
+    fis = FuzzySystem("always", (x,), (y,), (Rule((0,), (1,)),), resolution=7)
+    ex = fis.explain(0.3)
+    assert ex.rules == ("always then y is a",) and ex.strengths[0] == 1.0
+    # MATLAB's linspace: lo + (j * (hi - lo)) / (n - 1), as the kernels sampled it
+    np.testing.assert_array_equal(ex.grid[0], [0 + (j * 3.0) / 6 for j in range(7)])
+    assert ex.outputs["y"] == pytest.approx(1.0)
