@@ -17,7 +17,7 @@ import time
 import numpy as np
 import pytest
 
-from monitor.camera import Camera
+from monitor.geometry.camera import Camera
 from monitor.synthetic import CONDITIONS, generate_frames, warm_up
 from monitor.synthetic.raycast import render_depth, render_depth_reference
 from monitor.synthetic.scene import make_layout

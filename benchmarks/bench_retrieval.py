@@ -1,6 +1,6 @@
 """Speed of the depth-based retrieval on one 1600 x 900 synthetic frame, one thread.
 
-Peers in the same run: the fused version (:class:`monitor.retrieval.Retriever`: two Numba
+Peers in the same run: the fused version (:class:`monitor.depth.retrieval.Retriever`: two Numba
 passes, blur and Canny on the non-zero region) against a straight NumPy/OpenCV version of
 the same computation (:func:`retrieve_numpy` below), whole retrieval and per-pixel part
 alone. Both give identical boxes (checked before timing). The frame is synthetic
@@ -20,10 +20,10 @@ import cv2
 import numpy as np
 import pytest
 
-from monitor import _retrieval_kernels as kernels
-from monitor.boxes import within_range
-from monitor.prior import build_prior
-from monitor.retrieval import RetrievalParams, Retriever, _block_means, warm_up
+from monitor.depth import _retrieval_kernels as kernels
+from monitor.geometry.boxes import within_range
+from monitor.depth.prior import build_prior
+from monitor.depth.retrieval import RetrievalParams, Retriever, _block_means, warm_up
 from monitor.synthetic.generate import generate_frames
 
 PARAMS = RetrievalParams()

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from monitor import _box_kernels as _k
-from monitor.boxes import as_boxes
+from monitor.geometry import _box_kernels as _k
+from monitor.geometry.boxes import as_boxes
 
 #: :attr:`Alignment.status` of a frame with at least one safety-critical object.
 OK = "ok"

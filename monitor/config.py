@@ -14,8 +14,8 @@ from typing import Any
 import yaml
 
 from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA
-from monitor.boxes import DEFAULT_RANGE_M
-from monitor.retrieval import RetrievalParams
+from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.depth.retrieval import RetrievalParams
 
 DEFAULT_CONFIG_PATH = Path(__file__).with_name("default_config.yaml")
 DISTANCE_MODES = ("camera_depth", "ego_closest")
@@ -59,7 +59,7 @@ class MonitorConfig:
     min_score : float
         Detections scoring below it are dropped before projection.
     distance : {"camera_depth", "ego_closest"}
-        How a detection's d is measured (see :func:`monitor.camera.project_boxes`).
+        How a detection's d is measured (see :func:`monitor.geometry.camera.project_boxes`).
     retrieval : RetrievalParams
         The depth view's parameters; its ``max_range`` always equals ``max_range`` here.
     fail_safe_risk : float

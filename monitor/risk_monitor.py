@@ -2,8 +2,8 @@
 
 Per frame (:meth:`RiskMonitor.step`):
 
-1. depth view: safety-critical objects S from the depth map (:mod:`monitor.retrieval`);
-2. detector view: the 3D detections projected into the image, P (:func:`monitor.camera.project_boxes`);
+1. depth view: safety-critical objects S from the depth map (:mod:`monitor.depth.retrieval`);
+2. detector view: the 3D detections projected into the image, P (:func:`monitor.geometry.camera.project_boxes`);
 3. alignment of S to P: IoU~ and RDD~ (:func:`monitor.alignment.align`);
 4. risk = FIS(IoU~, RDD~) (:mod:`fuzzcore`).
 
@@ -21,10 +21,11 @@ import numpy as np
 
 import fuzzcore
 from monitor.alignment import Alignment, align
-from monitor.camera import Camera, as_boxes3d, project_boxes
+from monitor.geometry.boxes3d import as_boxes3d
+from monitor.geometry.camera import Camera, project_boxes
 from monitor.config import MonitorConfig
-from monitor.prior import check_prior
-from monitor.retrieval import Retriever
+from monitor.depth.prior import check_prior
+from monitor.depth.retrieval import Retriever
 
 OK = "ok"
 NO_OBJECTS = "no-objects"
@@ -89,7 +90,7 @@ class RiskMonitor:
     fis : fuzzcore.FuzzySystem
         Two inputs named ``iou`` and ``rdd`` (any order) and one output in [0, 1].
     prior : ndarray of shape (H, W)
-        Mean inverse depth of training frames, 1/m (:mod:`monitor.prior`).
+        Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`).
     camera : Camera
         The camera the depth maps and projections refer to; its size must match ``prior``.
     config : MonitorConfig, optional
@@ -107,7 +108,7 @@ class RiskMonitor:
         if lo < 0 or hi > 1:
             raise ValueError(f"fis output range [{lo}, {hi}] must lie within [0, 1] (a risk)")
         if not isinstance(camera, Camera):
-            raise ValueError(f"camera is a {type(camera).__name__}, expected a monitor.camera.Camera")
+            raise ValueError(f"camera is a {type(camera).__name__}, expected a monitor.geometry.camera.Camera")
         prior = check_prior(prior)
         if prior.shape != (camera.height, camera.width):
             raise ValueError(f"prior has shape {prior.shape}, the camera's image is "

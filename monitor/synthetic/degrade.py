@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from monitor.camera import Camera, as_boxes3d
+from monitor.geometry.boxes3d import as_boxes3d
+from monitor.geometry.camera import Camera
 from monitor.synthetic import _degrade_kernels as _k
 from monitor.synthetic.conditions import (
     DETECTOR_CLASSES, FALSE_POSITIVE_CLASSES, DepthErrors, DetectorErrors,

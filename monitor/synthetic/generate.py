@@ -20,8 +20,8 @@ from typing import Iterator
 
 import numpy as np
 
-from monitor.camera import Camera
-from monitor.frames import Frame, Scene
+from monitor.geometry.camera import Camera
+from monitor.datasets.frames import Frame, Scene
 from monitor.synthetic.conditions import Condition, get_condition
 from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, detect, estimate_depth
 from monitor.synthetic.raycast import ground_points, render_depth

@@ -2,13 +2,13 @@
 
 The scene is the ground plane ``z = 0`` of the ego frame (nuScenes' ego origin is on the
 ground) and a set of upright 3D boxes (rows ``x, y, z, w, l, h, yaw``, see
-:mod:`monitor.camera`). One ray per pixel centre (pixel ``(i, j)`` is the point
+:mod:`monitor.geometry.camera`). One ray per pixel centre (pixel ``(i, j)`` is the point
 ``(i + 0.5, j + 0.5)``, the camera module's convention) finds the nearest hit at or beyond
 the near plane. The depth is the hit's camera-frame z in metres, ``inf`` where the ray hits
 nothing (sky). A box the near plane cuts reads ``near`` where it blocks the view.
 
 :func:`render_depth` is the Numba renderer. It tests each box only on the pixels of its
-projected extent (:func:`monitor.camera.project_boxes`, plus a pixel of margin).
+projected extent (:func:`monitor.geometry.camera.project_boxes`, plus a pixel of margin).
 :func:`render_depth_reference` is the same computation in plain vectorised NumPy over every
 pixel and every box, slow and obviously complete; it exists to check and to benchmark the
 renderer.
@@ -19,8 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from monitor.camera import Camera, as_boxes3d, project_boxes
-from monitor.frames import LABEL_ROAD, LABEL_SKY
+from monitor.geometry.boxes3d import as_boxes3d
+from monitor.geometry.camera import Camera, project_boxes
+from monitor.datasets.frames import LABEL_ROAD, LABEL_SKY
 from monitor.synthetic import _raycast_kernels as _k
 
 #: most boxes an int16 label map can name (box k is k + 1)
@@ -36,7 +37,7 @@ class DepthRender:
     depth : ndarray of shape (H, W), float32
         Camera-frame depth of the nearest hit, metres; ``inf`` for no hit.
     labels : ndarray of shape (H, W), int16
-        :data:`~monitor.frames.LABEL_SKY` (no hit), :data:`~monitor.frames.LABEL_ROAD`
+        :data:`~monitor.datasets.frames.LABEL_SKY` (no hit), :data:`~monitor.datasets.frames.LABEL_ROAD`
         (ground) or ``k + 1`` for box ``k``.
     silhouette_px : ndarray of shape (n,), int64
         Per box, the pixels whose ray hits it, occluded or not.

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from monitor.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK
+from monitor.datasets.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK
 
 LANE_WIDTH_M = 3.5
 SIDEWALK_WIDTH_M = 3.0

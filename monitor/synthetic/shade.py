@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from monitor.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY, Frame
+from monitor.datasets.frames import Frame, LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY
 
 #: RGB colour of each ground-truth class (unknown classes are grey)
 CLASS_COLOURS = {

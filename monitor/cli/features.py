@@ -1,0 +1,54 @@
+"""``fuzzrisk features -o FEATURES.csv``: the (IoU~, RDD~, 1 - USC~) table of scenes.
+
+One row per frame in which the depth view found objects (status ok): ``scene``,
+``frame``, ``condition``, ``iou``, ``rdd`` and ``target`` (1 - USC~; empty when the frame
+has no ground truth in range). This is the training data of ``fuzzrisk tune``; ``--split``
+picks the synthetic benchmark's training or test scenes (split by scene, never by frame).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+
+import numpy as np
+from tqdm import tqdm
+
+import fuzzcore
+from monitor.cli.scenes import add_scene_arguments, count_frames, select_scenes
+from monitor.config import load_config
+from monitor.offline.evaluation import feature_rows, observe_scenes
+from monitor.risk_monitor import RiskMonitor
+from monitor.shipped import shipped_rules
+
+HELP = "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"
+FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("-o", "--output", required=True, metavar="FEATURES.csv", help="where to write the table")
+    parser.add_argument("--split", choices=("train", "test", "all"), default="train",
+                        help="synthetic scenes to use (default %(default)s)")
+    parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
+    add_scene_arguments(parser, default_scenes=10, default_test=4)
+
+
+def run(args: argparse.Namespace) -> int:
+    split = None if args.split == "all" else args.split
+    bar = tqdm(total=count_frames(args, split), unit="frame", desc="features", disable=None)
+    selection = select_scenes(args, split, progress=bar.update)
+    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), selection.prior, selection.camera,
+                          load_config(args.config), explain=False)
+    observations = observe_scenes(monitor, selection.scenes, progress=bar.update)
+    bar.close()
+    rows = feature_rows(observations)
+    with open(args.output, "w", newline="", encoding="utf-8") as f:
+        writer = csv.DictWriter(f, fieldnames=FIELDS)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({**row, "target": "" if np.isnan(row["target"]) else repr(row["target"])})
+    no_target = sum(1 for r in rows if np.isnan(r["target"]))
+    print(selection.note)
+    print(f"{len(rows)} frames with features from {len(selection.scenes)} scenes "
+          f"({len(observations) - len(rows)} frames without: no objects or invalid; "
+          f"{no_target} with no ground truth in range, target left empty) -> {args.output}")
+    return 0

@@ -1,0 +1,49 @@
+"""``fuzzrisk prior build DEPTH_DIR -o PRIOR.npy``: the inverse-depth prior of training frames.
+
+Streams the depth maps of DEPTH_DIR (``.npy`` metres or 16-bit ``.png``, see
+:mod:`monitor.depth.files`) in sorted frame order through :class:`monitor.depth.prior.InverseDepthPrior`
+(constant memory) and writes the per-pixel mean of 1/D over valid samples as float32
+``.npy`` (1/m, NaN where no frame had a valid depth).
+"""
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+from tqdm import tqdm
+
+from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
+from monitor.depth.prior import build_prior, save_prior
+
+HELP = "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)
+    build = actions.add_parser(
+        "build", help="mean inverse depth of a folder of depth maps",
+        description="Per-pixel mean of 1/D over the valid samples of every depth map in "
+                    "DEPTH_DIR (.npy in metres or 16-bit .png), written as float32 .npy "
+                    "(1/m, NaN where no frame had a valid depth).",
+    )
+    build.add_argument("depth_dir", metavar="DEPTH_DIR", help="folder of training depth maps")
+    build.add_argument("-o", "--output", required=True, metavar="PRIOR.npy", help="where to write the prior")
+    build.add_argument("--png-scale", type=float, default=KITTI_PNG_SCALE,
+                       help="stored PNG value per metre (default %(default)g, KITTI)")
+
+
+def run(args: argparse.Namespace) -> int:
+    # "build" is the only action (argparse enforces it)
+    folder = DepthFolder(args.depth_dir, png_scale=args.png_scale)
+    if len(folder) == 0:
+        raise ValueError(f"no depth maps (.npy or .png) in {folder.root}")
+    frames = tqdm(folder.frames, unit="frame", desc="prior", disable=None)
+    accumulator = build_prior((str(folder.path(frame)), folder[frame]) for frame in frames)
+    save_prior(args.output, accumulator.mean())
+    count = accumulator.count
+    height, width = accumulator.shape
+    never = int(np.count_nonzero(count == 0))
+    print(f"prior of {accumulator.n_frames} frames ({width}x{height}) written to {args.output}; "
+          f"valid samples per pixel: min {int(count.min())}, median {int(np.median(count))}; "
+          f"{never} pixels ({100 * never / count.size:.2f}%) never valid (NaN in the prior)")
+    return 0

@@ -1,1 +1,0 @@
-"""Subcommands of the ``fuzzrisk`` command line (see :mod:`monitor.cli`)."""

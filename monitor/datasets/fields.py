@@ -1,0 +1,75 @@
+"""Typed access to JSON objects whose errors name the file and the field path.
+
+Used by the readers of on-disk formats (:mod:`monitor.datasets.scene_folder`,
+:mod:`monitor.datasets.nuscenes`): ``fields.number("yaw")`` returns a float or raises
+``ValueError("scene.json: frames[3].annotations[2].yaw: 'x' is not a finite number")``.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+
+class JsonFields:
+    """Typed access to one JSON object; errors name the file and the field path."""
+
+    def __init__(self, obj, where: str, file: Path):
+        if not isinstance(obj, dict):
+            raise ValueError(f"{file}: {where} is a {type(obj).__name__}, expected an object")
+        self.obj, self.where, self.file = obj, where, file
+
+    def error(self, key: str, message: str) -> ValueError:
+        return ValueError(f"{self.file}: {self.where}.{key}: {message}")
+
+    def get(self, key: str):
+        if key not in self.obj:
+            raise ValueError(f"{self.file}: {self.where}: field {key!r} is missing")
+        return self.obj[key]
+
+    def number(self, key: str) -> float:
+        value = self.get(key)
+        if (isinstance(value, bool) or not isinstance(value, (int, float))
+                or not math.isfinite(value)):
+            raise self.error(key, f"{value!r} is not a finite number")
+        return float(value)
+
+    def integer(self, key: str, *, optional: bool = False) -> int | None:
+        value = self.get(key)
+        if value is None and optional:
+            return None
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise self.error(key, f"{value!r} is not an integer")
+        return value
+
+    def string(self, key: str, *, optional: bool = False) -> str | None:
+        value = self.get(key)
+        if value is None and optional:
+            return None
+        if not isinstance(value, str):
+            raise self.error(key, f"{value!r} is not a string")
+        return value
+
+    def numbers(self, key: str, n: int) -> list[float]:
+        value = self.get(key)
+        if (not isinstance(value, list) or len(value) != n
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
+            raise self.error(key, f"{value!r} is not a list of {n} numbers")
+        return [float(v) for v in value]
+
+    def matrix(self, key: str, rows: int, cols: int) -> np.ndarray:
+        value = self.get(key)
+        ok = isinstance(value, list) and len(value) == rows and all(
+            isinstance(r, list) and len(r) == cols
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in r)
+            for r in value)
+        if not ok:
+            raise self.error(key, f"expected a {rows}x{cols} list of lists of numbers")
+        return np.array(value, dtype=np.float64)
+
+    def objects(self, key: str) -> list["JsonFields"]:
+        value = self.get(key)
+        if not isinstance(value, list):
+            raise self.error(key, f"is a {type(value).__name__}, expected a list")
+        return [JsonFields(v, f"{self.where}.{key}[{i}]", self.file) for i, v in enumerate(value)]

@@ -1,0 +1,175 @@
+"""Frames of a driving scene in memory: :class:`Frame` and :class:`Scene`.
+
+A :class:`Frame` is what the monitor needs from one camera frame: the estimated depth
+map, the 3D detector's boxes, and for evaluation the ground-truth boxes (and, from the
+synthetic generator, the true depth and a label map). A :class:`Scene` is a sequence of
+frames from one camera. 3D boxes are float64 ``(n, 7)`` rows ``x, y, z, w, l, h, yaw``
+in the ego frame (see :mod:`monitor.geometry.boxes3d`). Class names are numpy string arrays.
+
+The label map (int16, ``(H, W)``) says what each pixel of the true depth shows:
+:data:`LABEL_SKY`, :data:`LABEL_ROAD`, :data:`LABEL_MARKING`, :data:`LABEL_SIDEWALK`, or
+``k + 1`` for ground-truth box ``k`` of the frame.
+On disk they are scene folders (:mod:`monitor.datasets.scene_folder`).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from monitor.geometry.boxes3d import as_boxes3d
+from monitor.geometry.camera import Camera
+
+#: label-map codes (ground-truth box k is k + 1)
+LABEL_SKY = -1
+LABEL_ROAD = 0
+LABEL_MARKING = -2
+LABEL_SIDEWALK = -3
+
+#: the per-frame maps: field name -> dtype on disk and in memory
+MAPS = {"depth_est": np.float32, "depth_true": np.float32, "labels": np.int16}
+
+
+def _check_boxes3d(boxes, name: str) -> np.ndarray:
+    arr = np.asarray(boxes)
+    if arr.dtype != np.float64 or arr.ndim != 2 or arr.shape[1] != 7:
+        raise ValueError(
+            f"{name} has shape {arr.shape} and dtype {arr.dtype}, expected float64 (n, 7) rows "
+            "x, y, z, w, l, h, yaw (metres, radians; an empty frame is (0, 7))"
+        )
+    return as_boxes3d(arr, name)  # finite, sizes > 0
+
+
+def _check_vector(values, name: str, n: int, kind: str) -> np.ndarray:
+    arr = np.asarray(values)
+    expected = {"str": "U", "int": "i", "float": "f"}[kind]
+    if arr.ndim != 1 or arr.shape[0] != n or arr.dtype.kind != expected:
+        raise ValueError(
+            f"{name} has shape {arr.shape} and dtype {arr.dtype}, expected a 1-D {kind} array "
+            f"of length {n} (one per box)"
+        )
+    return arr
+
+
+def _check_unit_interval(arr: np.ndarray, name: str) -> None:
+    bad = ~(np.isfinite(arr) & (arr >= 0.0) & (arr <= 1.0))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(f"{name}[{i}] = {float(arr[i])!r}, must be in [0, 1]")
+
+
+def _check_map(array, name: str, camera: Camera, dtype, optional: bool) -> None:
+    if array is None:
+        if not optional:
+            raise ValueError(f"{name} is missing")
+        return
+    shape = (camera.height, camera.width)
+    if not isinstance(array, np.ndarray) or array.shape != shape or array.dtype != dtype:
+        got = (array.shape, array.dtype) if isinstance(array, np.ndarray) else type(array).__name__
+        raise ValueError(
+            f"{name} is {got}, expected a {np.dtype(dtype)} array of shape {shape} "
+            "(the camera's height x width)"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One camera frame of a scene.
+
+    Attributes
+    ----------
+    index : int
+        Position in the scene, from 0.
+    timestamp : float
+        Seconds from the start of the scene.
+    ego_speed : float
+        Metres per second, >= 0.
+    camera : Camera
+    depth_est : ndarray of shape (H, W), float32
+        Estimated depth in metres (non-finite or <= 0 pixels are invalid).
+    depth_true : ndarray of shape (H, W), float32, or None
+        True camera-frame depth in metres, inf where the ray hits nothing.
+    labels : ndarray of shape (H, W), int16, or None
+        What each pixel of the true depth shows (the LABEL_* codes, or k + 1 for box k).
+    gt_boxes3d : ndarray of shape (n, 7), float64
+        Ground-truth boxes ``x, y, z, w, l, h, yaw`` in the ego frame.
+    gt_classes : ndarray of shape (n,), str
+    gt_ids : ndarray of shape (n,), int64
+        Instance ids, unique within the frame, stable across the scene.
+    gt_visibility : ndarray of shape (n,), float64
+        Visible fraction of each box's silhouette in this image, in [0, 1] (0: not in view).
+    det_boxes3d : ndarray of shape (m, 7), float64
+        The 3D detector's boxes, same layout.
+    det_classes : ndarray of shape (m,), str
+        Detection names (nuScenes' detection vocabulary).
+    det_scores : ndarray of shape (m,), float64
+        Detection scores in [0, 1].
+    """
+
+    index: int
+    timestamp: float
+    ego_speed: float
+    camera: Camera
+    depth_est: np.ndarray
+    depth_true: np.ndarray | None
+    labels: np.ndarray | None
+    gt_boxes3d: np.ndarray
+    gt_classes: np.ndarray
+    gt_ids: np.ndarray
+    gt_visibility: np.ndarray
+    det_boxes3d: np.ndarray
+    det_classes: np.ndarray
+    det_scores: np.ndarray
+
+    def __post_init__(self):
+        if not isinstance(self.index, int) or isinstance(self.index, bool) or self.index < 0:
+            raise ValueError(f"index = {self.index!r}, must be an integer >= 0")
+        for name in ("timestamp", "ego_speed"):
+            value = getattr(self, name)
+            if not isinstance(value, float) or not math.isfinite(value):
+                raise ValueError(f"{name} = {value!r}, must be a finite float")
+        if self.ego_speed < 0:
+            raise ValueError(f"ego_speed = {self.ego_speed!r}, must be >= 0 m/s")
+        if not isinstance(self.camera, Camera):
+            raise ValueError(f"camera is a {type(self.camera).__name__}, expected a Camera")
+        for name, dtype in MAPS.items():
+            _check_map(getattr(self, name), name, self.camera, dtype, optional=name != "depth_est")
+        n = _check_boxes3d(self.gt_boxes3d, "gt_boxes3d").shape[0]
+        _check_vector(self.gt_classes, "gt_classes", n, "str")
+        ids = _check_vector(self.gt_ids, "gt_ids", n, "int")
+        if np.unique(ids).size != n:
+            raise ValueError(f"gt_ids has repeated instance ids: {np.sort(ids).tolist()}")
+        _check_unit_interval(_check_vector(self.gt_visibility, "gt_visibility", n, "float"),
+                             "gt_visibility")
+        m = _check_boxes3d(self.det_boxes3d, "det_boxes3d").shape[0]
+        _check_vector(self.det_classes, "det_classes", m, "str")
+        _check_unit_interval(_check_vector(self.det_scores, "det_scores", m, "float"),
+                             "det_scores")
+        if self.labels is not None and n + 1 > np.iinfo(np.int16).max:
+            raise ValueError(f"{n} ground-truth boxes do not fit an int16 label map")
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A sequence of frames from one camera.
+
+    Attributes
+    ----------
+    name : str
+    camera : Camera
+    condition : str
+        The condition (``"nominal"``, ``"night"``, ...); free text for real data.
+    seed : int or None
+        The generator's seed (None for real data).
+    synthetic : bool
+        True for generated data: every report on it must say so.
+    frames : tuple of Frame
+    """
+
+    name: str
+    camera: Camera
+    condition: str
+    seed: int | None
+    synthetic: bool
+    frames: tuple[Frame, ...]

@@ -1,0 +1,6 @@
+"""What runs offline, with ground truth: USC~, the evaluation, the closed-loop simulation.
+
+- :mod:`~monitor.offline.groundtruth`: USC~ and the training target 1 - USC~;
+- :mod:`~monitor.offline.evaluation`: the paper's Tables I-III and the quality measures;
+- :mod:`~monitor.offline.simulation`: the monitor and shield in a closed loop.
+"""

@@ -1,0 +1,1 @@
+"""Figures (PNG, matplotlib) and tables (terminal, Markdown) of the reports."""

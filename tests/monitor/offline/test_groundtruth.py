@@ -1,0 +1,90 @@
+"""Tests for monitor.offline.groundtruth: USC~ per frame and the target 1 - USC~."""
+import math
+
+import numpy as np
+import pytest
+
+from monitor.offline.groundtruth import NO_TARGETS, OK, score
+
+EMPTY = np.empty((0, 5))
+
+G = np.array([[100, 100, 20, 20, 10.0],   # G0: x [90, 110], y [90, 110]
+              [300, 100, 40, 20, 8.0],    # G1: x [280, 320], y [90, 110]
+              [600, 100, 10, 10, 25.0],   # G2: beyond 20 m
+              [800, 300, 10, 10, 15.0]])  # G3: in range, no prediction left for it
+P = np.array([[105, 100, 20, 20, 12.5],   # P0 on G0: x [95, 115]
+              [300, 100, 20, 20, 6.0]])   # P1 inside G1: x [290, 310]
+
+
+def test_hand_made_frame():
+    r = score(P, G)
+    np.testing.assert_array_equal(r.g_index, [0, 1, 3])
+    np.testing.assert_array_equal(r.partner, [0, 1, -1])
+    # G0-P0: intersection 15 * 20 = 300, area(G0) 400 -> IoG 0.75; DR min(1, 10 / 12.5) = 0.8
+    # G1-P1: P1 inside G1: 400 / 800 -> IoG 0.5; DR min(1, 8 / 6) = 1
+    # G3: no prediction -> 0
+    np.testing.assert_allclose(r.iog, [0.75, 0.5, 0.0])
+    np.testing.assert_allclose(r.depth_ratio, [0.8, 1.0, 0.0])
+    np.testing.assert_allclose(r.usc, [0.6, 0.5, 0.0])
+    assert r.usc_mean == pytest.approx((0.6 + 0.5 + 0.0) / 3)
+    assert r.target == pytest.approx(1 - 1.1 / 3)
+    assert r.status == OK and r.n_targets == 3 and r.max_range == 20.0
+
+
+def test_range_limit_is_configurable_and_inclusive():
+    r = score(P, G, max_range=25.0)  # G2 at exactly 25 m now counts
+    np.testing.assert_array_equal(r.g_index, [0, 1, 2, 3])
+    assert r.usc_mean == pytest.approx(1.1 / 4)
+    r = score(P, G, max_range=9.0)  # only G1 (8 m)
+    np.testing.assert_array_equal(r.g_index, [1])
+    # G1 alone: the closest P is P1 (centre distance 0): USC 0.5
+    np.testing.assert_array_equal(r.partner, [1])
+    assert r.target == pytest.approx(0.5)
+
+
+def test_no_ground_truth_in_range_has_no_target():
+    for frame in (score(P, G, max_range=5.0), score(P, EMPTY), score(EMPTY, EMPTY)):
+        assert frame.status == NO_TARGETS and frame.n_targets == 0
+        assert math.isnan(frame.usc_mean) and math.isnan(frame.target)
+
+
+def test_no_predictions_is_full_risk():
+    r = score(EMPTY, G)
+    np.testing.assert_array_equal(r.partner, [-1, -1, -1])
+    assert r.usc_mean == 0.0 and r.target == 1.0 and r.status == OK
+
+
+def test_pairing_is_hungarian_on_centre_distance():
+    # G at x = 0 and 10, P at 6 and 20: greedy would give G1-P0, the optimum G0-P0, G1-P1
+    g = np.array([[0, 0, 8, 8, 5.0], [10, 0, 8, 8, 5.0]])
+    p = np.array([[6, 0, 8, 8, 5.0], [20, 0, 8, 8, 5.0]])
+    r = score(p, g)
+    np.testing.assert_array_equal(r.partner, [0, 1])
+    # G0 x [-4, 4] & P0 x [2, 10] -> 2 * 8 = 16 of 64; G1 x [6, 14] & P1 x [16, 24] -> 0
+    np.testing.assert_allclose(r.usc, [0.25, 0.0])
+
+
+@pytest.mark.parametrize("p, g, kwargs, message", [
+    (P, [[0, 0, 0, 5, 5.0]], {}, r"G\[0, 2\] \(w\) = 0.0: .*positive area"),
+    ([[0, 0, 1, 1, -1.0]], G, {}, r"P\[0, 4\] \(d\) = -1.0"),
+    (P, G, {"max_range": 0.0}, r"max_range = 0.0"),
+])
+def test_bad_input_is_rejected(p, g, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        score(p, g, **kwargs)
+
+
+def test_scores_bounded_on_random_frames():
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        n, m = rng.integers(0, 8, size=2)
+        g = np.column_stack([rng.uniform(0, 400, m), rng.uniform(0, 200, m),
+                             rng.uniform(1, 80, (m, 2)), rng.uniform(0, 40, m)])
+        p = np.column_stack([rng.uniform(0, 400, n), rng.uniform(0, 200, n),
+                             rng.uniform(0, 80, (n, 2)), rng.uniform(0, 40, n)])
+        r = score(p, g)
+        assert r.n_targets == int((g[:, 4] <= 20.0).sum())
+        assert np.all((r.usc >= 0.0) & (r.usc <= 1.0))
+        assert np.all(r.usc <= r.iog) and np.all(r.usc <= r.depth_ratio)
+        if r.n_targets:
+            assert 0.0 <= r.target <= 1.0

@@ -1,0 +1,214 @@
+"""Tests for monitor.alignment: Hungarian pairing, thresholds, frame means, empty frames."""
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from monitor.alignment import (DEFAULT_ALPHA, DEFAULT_BETA, NO_OBJECTS, OK, align,
+                               assign_by_centre)
+from monitor.geometry.boxes import centre_distances
+
+EMPTY = np.empty((0, 5))
+
+
+def test_hand_made_frame():
+    S = np.array([[100, 100, 20, 20, 10.0],   # x [90, 110], y [90, 110]
+                  [300, 100, 40, 20, 8.0]])   # x [280, 320], y [90, 110]
+    P = np.array([[305, 100, 40, 20, 8.8],    # near S1: centre distance 5
+                  [104, 100, 20, 20, 13.0],   # near S0: centre distance 4
+                  [500, 500, 10, 10, 5.0]])   # a decoy far from both
+    a = align(S, P)
+    assert (DEFAULT_ALPHA, DEFAULT_BETA) == (0.3, 0.2) == (a.alpha, a.beta)
+    np.testing.assert_array_equal(a.partner, [1, 0])
+    # S0-P1: x [90, 110] & [94, 114] -> 16 * 20 = 320; union 400 + 400 - 320 = 480
+    #        RDD (13 - 10) / 10 = 0.3: |0.3| >= 0.2, the pair does not count
+    # S1-P0: x [280, 320] & [285, 325] -> 35 * 20 = 700; union 800 + 800 - 700 = 900
+    #        RDD (8.8 - 8) / 8 = 0.1: counts
+    np.testing.assert_allclose(a.pair_iou, [320 / 480, 700 / 900])
+    np.testing.assert_allclose(a.pair_rdd, [0.3, 0.1])
+    np.testing.assert_array_equal(a.matched, [False, True])
+    np.testing.assert_allclose(a.iou, [0.0, 700 / 900])
+    np.testing.assert_allclose(a.rdd, [1.0, 0.1])
+    assert a.iou_mean == pytest.approx((0.0 + 700 / 900) / 2)
+    assert a.rdd_mean == pytest.approx((1.0 + 0.1) / 2)
+    assert a.status == OK and a.n_objects == 2
+
+
+def test_relaxed_thresholds_count_more_pairs():
+    S = np.array([[100, 100, 20, 20, 10.0]])
+    P = np.array([[104, 100, 20, 20, 13.0]])  # IoU 2/3, RDD 0.3 (see the hand-made frame)
+    assert not align(S, P).matched[0]
+    a = align(S, P, alpha=0.5, beta=0.31)
+    assert a.matched[0]
+    assert a.iou_mean == pytest.approx(2 / 3) and a.rdd_mean == pytest.approx(0.3)
+    assert not align(S, P, alpha=0.7, beta=0.31).matched[0]  # 2/3 <= 0.7
+
+
+def test_thresholds_are_strict():
+    # x [-1, 1] & [0, 2]: intersection 1 * 2 = 2, union 4 + 4 - 2 = 6 -> IoU 1/3
+    # RDD (5 - 4) / 4 = 0.25
+    S = np.array([[0, 0, 2, 2, 4.0]])
+    P = np.array([[1, 0, 2, 2, 5.0]])
+    assert align(S, P, alpha=1 / 3 - 1e-9, beta=0.25 + 1e-9).matched[0]
+    assert not align(S, P, alpha=1 / 3, beta=0.25 + 1e-9).matched[0]   # IoU > alpha fails
+    assert not align(S, P, alpha=1 / 3 - 1e-9, beta=0.25).matched[0]   # |RDD| < beta fails
+
+
+def test_negative_rdd_counts_by_its_magnitude():
+    S = np.array([[0, 0, 10, 10, 10.0]])
+    P = np.array([[0, 0, 10, 10, 8.5]])  # RDD (8.5 - 10) / 10 = -0.15, |-0.15| < 0.2
+    a = align(S, P)
+    assert a.matched[0] and a.rdd_mean == pytest.approx(-0.15) and a.iou_mean == 1.0
+
+
+def test_assignment_is_optimal_not_greedy():
+    # centres on a line: S at 0 and 10, P at 6 and 20.
+    # greedy (closest first): S1-P0 (4), then S0-P1 (20): total 24
+    # optimal: S0-P0 (6) + S1-P1 (10) = 16
+    S = np.array([[0, 0, 4, 4, 5.0], [10, 0, 4, 4, 5.0]])
+    P = np.array([[6, 0, 4, 4, 5.0], [20, 0, 4, 4, 5.0]])
+    np.testing.assert_array_equal(assign_by_centre(S, P), [0, 1])
+    np.testing.assert_array_equal(align(S, P).partner, [0, 1])
+
+
+def test_more_objects_than_predictions():
+    S = np.array([[0, 0, 4, 4, 5.0], [100, 0, 4, 4, 5.0], [200, 0, 4, 4, 5.0]])
+    P = np.array([[101, 0, 4, 4, 5.0]])
+    a = align(S, P)
+    np.testing.assert_array_equal(a.partner, [-1, 0, -1])
+    # S1-P0: x [98, 102] & [99, 103] -> 3 * 4 = 12, union 16 + 16 - 12 = 20; RDD 0
+    np.testing.assert_allclose(a.pair_iou, [0.0, 0.6, 0.0])
+    np.testing.assert_allclose(a.pair_rdd, [1.0, 0.0, 1.0])
+    np.testing.assert_array_equal(a.matched, [False, True, False])
+    assert a.iou_mean == pytest.approx(0.6 / 3)
+    assert a.rdd_mean == pytest.approx(2 / 3)
+
+
+def test_no_predictions_scores_every_object_worst():
+    S = np.array([[0, 0, 4, 4, 5.0], [100, 0, 4, 4, 7.0]])
+    a = align(S, EMPTY)
+    assert a.status == OK
+    np.testing.assert_array_equal(a.partner, [-1, -1])
+    assert a.iou_mean == 0.0 and a.rdd_mean == 1.0
+
+
+@pytest.mark.parametrize("P", [EMPTY, np.array([[0, 0, 4, 4, 5.0]])])
+def test_no_objects_has_no_features(P):
+    a = align(EMPTY, P)
+    assert a.status == NO_OBJECTS and a.n_objects == 0
+    assert math.isnan(a.iou_mean) and math.isnan(a.rdd_mean)
+    for arr in (a.partner, a.pair_iou, a.pair_rdd, a.matched, a.iou, a.rdd):
+        assert arr.shape == (0,)
+
+
+def test_prediction_at_distance_zero_is_allowed():
+    a = align(np.array([[0, 0, 4, 4, 5.0]]), np.array([[0, 0, 4, 4, 0.0]]))
+    assert a.pair_rdd[0] == -1.0 and not a.matched[0]  # (0 - 5) / 5
+
+
+@pytest.mark.parametrize("S, P, kwargs, message", [
+    ([[0, 0, 4, 4, 0.0]], EMPTY, {}, r"S\[0, 4\] \(d\) = 0.0: .*> 0 metres"),
+    ([[0, 0, 4, 4, 1.0]], [[0, 0, 4, np.nan, 1.0]], {}, r"P\[0, 3\] \(h\) = nan"),
+    (np.zeros((2, 4)), EMPTY, {}, r"S has shape \(2, 4\)"),
+    (EMPTY, EMPTY, {"alpha": 1.5}, r"alpha = 1.5"),
+    (EMPTY, EMPTY, {"alpha": np.nan}, r"alpha = nan"),
+    (EMPTY, EMPTY, {"beta": 0.0}, r"beta = 0.0"),
+    (EMPTY, EMPTY, {"beta": np.inf}, r"beta = inf"),
+])
+def test_bad_input_is_rejected(S, P, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        align(S, P, **kwargs)
+
+
+def test_alignment_is_frozen():
+    a = align(np.array([[0, 0, 4, 4, 5.0]]), EMPTY)
+    with pytest.raises(AttributeError):
+        a.iou_mean = 1.0
+
+
+# ------------------------------------------------- against a slow, obvious reference
+
+
+def _reference(S, P, alpha, beta):
+    """Brute force over every injective pairing, Python floats."""
+    m, n = len(S), len(P)
+    dist = [[math.dist(s[:2], p[:2]) for p in P] for s in S]
+    best, best_partner = math.inf, None
+    if m <= n:
+        candidates = ((list(perm)) for perm in itertools.permutations(range(n), m))
+    else:
+        candidates = ([perm.index(i) if i in perm else -1 for i in range(m)]
+                      for perm in itertools.permutations(range(m), n))
+    for partner in candidates:
+        total = sum(dist[i][j] for i, j in enumerate(partner) if j >= 0)
+        if total < best:
+            best, best_partner = total, partner
+    ious, rdds = [], []
+    for i, j in enumerate(best_partner):
+        if j < 0:
+            ious.append(0.0), rdds.append(1.0)
+            continue
+        s, p = S[i], P[j]
+        iw = max(0.0, min(s[0] + s[2] / 2, p[0] + p[2] / 2) - max(s[0] - s[2] / 2, p[0] - p[2] / 2))
+        ih = max(0.0, min(s[1] + s[3] / 2, p[1] + p[3] / 2) - max(s[1] - s[3] / 2, p[1] - p[3] / 2))
+        iou = iw * ih / (s[2] * s[3] + p[2] * p[3] - iw * ih)
+        rdd = min(1.0, (p[4] - s[4]) / s[4])
+        ok = iou > alpha and abs(rdd) < beta
+        ious.append(iou if ok else 0.0), rdds.append(rdd if ok else 1.0)
+    return best_partner, ious, rdds
+
+
+def _frame(rng, m):
+    return np.column_stack([rng.uniform(0, 200, m), rng.uniform(0, 100, m),
+                            rng.uniform(5, 60, m), rng.uniform(5, 60, m),
+                            rng.uniform(1, 20, m)])
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_matches_brute_force_reference(seed):
+    rng = np.random.default_rng(seed)
+    m, n = rng.integers(0, 6, size=2)
+    S = _frame(rng, m)
+    P = _frame(rng, n)
+    P[: min(m, n)] = S[: min(m, n)] * rng.uniform(0.85, 1.15, (min(m, n), 5))  # near pairs
+    a = align(S, P)
+    if m == 0:
+        assert a.status == NO_OBJECTS
+        return
+    partner, ious, rdds = _reference(S.tolist(), P.tolist(), 0.3, 0.2)
+    np.testing.assert_array_equal(a.partner, partner)
+    np.testing.assert_allclose(a.iou, ious, atol=1e-12)
+    np.testing.assert_allclose(a.rdd, rdds, atol=1e-12)
+    assert a.iou_mean == pytest.approx(np.mean(ious)) and a.rdd_mean == pytest.approx(np.mean(rdds))
+
+
+# ------------------------------------------------------------------------ properties
+
+def _frames():
+    row = st.tuples(st.floats(0, 1600), st.floats(0, 900), st.floats(0, 300),
+                    st.floats(0, 300), st.floats(0.5, 60))
+    return st.lists(row, min_size=1, max_size=12).map(np.array)
+
+
+@given(_frames(), _frames(), st.randoms(use_true_random=False))
+def test_hungarian_cost_no_worse_than_a_random_assignment(S, P, random):
+    partner = assign_by_centre(S, P)
+    cost = centre_distances(S, P)
+    total = sum(cost[i, j] for i, j in enumerate(partner) if j >= 0)
+    assert (partner >= 0).sum() == min(len(S), len(P))
+    assert len(set(partner[partner >= 0].tolist())) == (partner >= 0).sum()  # injective
+    rows = random.sample(range(len(S)), min(len(S), len(P)))
+    cols = random.sample(range(len(P)), min(len(S), len(P)))
+    assert total <= sum(cost[i, j] for i, j in zip(rows, cols)) + 1e-9
+
+
+@given(_frames(), _frames(), st.floats(0, 1), st.floats(0.01, 2))
+def test_features_bounded(S, P, alpha, beta):
+    a = align(S, P, alpha, beta)
+    assert 0.0 <= a.iou_mean <= 1.0 and -1.0 <= a.rdd_mean <= 1.0
+    assert np.all((a.pair_rdd >= -1.0) & (a.pair_rdd <= 1.0))
+    assert np.all((a.pair_iou >= 0.0) & (a.pair_iou <= 1.0))
+    assert a.iou_mean == pytest.approx(a.iou.mean()) and a.rdd_mean == pytest.approx(a.rdd.mean())
