@@ -84,6 +84,8 @@ def percentile(sorted_values: np.ndarray, q: float) -> float:
         Equal to ``np.percentile(sorted_values, q)`` (see the module docstring).
     """
     n = len(sorted_values)
+    if n == 0 or not 0.0 <= q <= 100.0:
+        raise ValueError(f"percentile {q!r} of {n} samples: expected q in [0, 100] and at least one sample")
     h = (n - 1) * (q / 100.0)
     if h >= n - 1:
         return float(sorted_values[n - 1])

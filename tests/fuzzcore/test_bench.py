@@ -32,6 +32,8 @@ def test_percentile_by_hand():
     # max is p100 is the last sample; one sample is every percentile
     assert B.percentile(x, 100.0) == 10.0
     assert B.percentile(np.array([7.0]), 99.99) == 7.0
+    with pytest.raises(ValueError, match="percentile 101"):
+        B.percentile(x, 101)
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 7, 10, 999, 1000, 12345])
