@@ -20,6 +20,7 @@ COMMANDS = {
     "convert": "monitor.cli.convert",
     "tune": "monitor.cli.tune",
     "bench": "monitor.cli.bench",
+    "monitor": "monitor.cli.monitor",
 }
 
 

@@ -18,12 +18,12 @@ from pathlib import Path
 from tqdm import tqdm
 
 import fuzzcore
-from monitor.cli.scenes import add_scene_arguments, count_frames, select_scenes
+from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
-                                observe_scenes, recall_table, rmse_table)
-from monitor.risk_monitor import RiskMonitor
-from monitor.shipped import rules_dir, shipped_rules
+                                recall_table, rmse_table)
+from monitor.offline.run import observe_plans
+from monitor.shipped import rules_dir
 from monitor.report.tables import format_table
 
 HELP = "the paper's validation tables and each rule base's RMSE, on synthetic or recorded scenes"
@@ -43,6 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--rules-dir", default=None, help="rule bases to compare (default: the shipped rules/)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     add_scene_arguments(parser, default_scenes=6, default_test=2)
+    add_parallel_arguments(parser)
 
 
 def _by_condition(observations):
@@ -56,9 +57,8 @@ def run(args: argparse.Namespace) -> int:
     bar = tqdm(total=count_frames(args, None), unit="frame", desc="eval", disable=None)
     selection = select_scenes(args, None, progress=bar.update)
     config = load_config(args.config)
-    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), selection.prior, selection.camera, config,
-                          explain=False)
-    observations = observe_scenes(monitor, selection.scenes, progress=bar.update)
+    observations = observe_plans(run_spec(args, selection, config), selection.scenes, workers=args.workers,
+                                 ray=args.ray, progress=bar.update)
     bar.close()
     test_names = {s.name for s in selection.scenes if s.split == "test"}
     folder = Path(args.rules_dir) if args.rules_dir else rules_dir()

@@ -54,7 +54,7 @@ from monitor.datasets.frames import FrameRecord
 from monitor.datasets.nuscenes import read_detection_results
 from monitor.depth.files import DepthFolder
 from monitor.geometry.boxes3d import transform_boxes
-from monitor.geometry.camera import Camera, project_boxes
+from monitor.geometry.camera import project_boxes
 from monitor.geometry.poses import invert_pose, pose_matrix
 
 CAMERA_FILE = "camera.yaml"
@@ -310,12 +310,3 @@ class RecordingReader:
     def __repr__(self) -> str:
         return f"RecordingReader({str(self.directory)!r}, {len(self)} frames)"
 
-
-def camera_of(readers: list) -> Camera:
-    """The one camera of several scenes; an error naming two that differ."""
-    camera = readers[0].camera
-    other = next((r for r in readers if not r.camera.same_as(camera)), None)
-    if other is not None:
-        raise ValueError(f"scenes {readers[0].name!r} and {other.name!r} have different cameras and the "
-                         "monitor has one camera; run them apart")
-    return camera

@@ -11,6 +11,7 @@ The retrieval stages (paper, Fig. 2) are drawn by :mod:`monitor.report.retrieval
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Sequence
 
@@ -19,6 +20,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
 import numpy as np  # noqa: E402
+from matplotlib.figure import Figure  # noqa: E402
 
 from fuzzcore import FuzzySystem  # noqa: E402
 from fuzzcore._kernels import mf_array  # noqa: E402
@@ -105,20 +107,27 @@ def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = 
 def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: float = 0.5) -> Path:
     """One panel per scene: risk (solid), target 1 - USC~ (dashed), shield threshold.
 
-    ``series``: dicts with ``name``, ``time`` (s), ``risk`` and ``target`` arrays and
-    ``status`` (list of str; invalid frames are marked with an x).
+    ``series``: dicts with ``name``, ``time`` (s), ``risk`` and ``target`` arrays (NaN
+    where there is none: a frame not processed, no ground truth) and ``status`` (list of
+    str; invalid frames are marked with an x). Drawn on a :class:`matplotlib.figure.Figure`
+    (no pyplot state, safe in worker processes) and written whole or not at all (a
+    temporary file beside ``path``, then a rename).
     """
     n = len(series)
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.5 * cols, 2.6 * rows), squeeze=False, sharey=True)
+    fig = Figure(figsize=(4.5 * cols, 2.6 * rows))
+    axes = fig.subplots(rows, cols, squeeze=False, sharey=True)
     for ax, s in zip(axes.ravel(), series):
-        t = np.asarray(s["time"])
-        ax.plot(t, s["risk"], "-o", ms=3, label="risk")
-        ax.plot(t, s["target"], "--", color="grey", label="1 - USC~ (truth)")
-        invalid = np.array([st == "invalid-input" for st in s["status"]])
+        t = np.asarray(s["time"], dtype=np.float64)
+        risk = np.asarray(s["risk"], dtype=np.float64)
+        ax.plot(t, risk, "-o", ms=3, label="risk")
+        target = np.asarray(s["target"], dtype=np.float64)
+        if np.isfinite(target).any():
+            ax.plot(t, target, "--", color="grey", label="1 - USC~ (truth)")
+        invalid = np.array([st == "invalid-input" for st in s["status"]], dtype=bool)
         if invalid.any():
-            ax.plot(t[invalid], np.asarray(s["risk"])[invalid], "rx", label="invalid frame")
+            ax.plot(t[invalid], risk[invalid], "rx", label="invalid frame")
         ax.axhline(threshold, color="red", lw=0.8, ls=":")
         ax.set_title(s["name"], fontsize=9)
         ax.set_ylim(-0.02, 1.02)
@@ -128,6 +137,7 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    tmp = path.with_name(f".{path.name}.tmp")
+    fig.savefig(tmp, dpi=80, format="png")
+    os.replace(tmp, path)
     return path
