@@ -179,6 +179,39 @@ class RunSpec:
         return ChunkProcessor(monitor, None if self.depth_model is None else self.depth_model.build())
 
 
+def resolve_depths(records: list[FrameRecord], image_depth: ImageDepth | None
+                   ) -> list[tuple[np.ndarray | None, str]]:
+    """Each record's depth map: from memory, its file or its image (through ``image_depth``).
+
+    Returns
+    -------
+    list of (depth, source) or (None, message)
+        ``source`` names where the depth came from; a frame whose depth cannot be had
+        (a damaged file, an unreadable image) gets the reason instead.
+    """
+    out: list[tuple[np.ndarray | None, str] | None] = [None] * len(records)
+    images = []
+    for k, record in enumerate(records):
+        if record.depth is not None:
+            out[k] = (record.depth, "memory")
+        elif record.depth_path is not None:
+            try:
+                out[k] = (load_depth(record.depth_path, png_scale=record.png_scale), str(record.depth_path))
+            except (ValueError, OSError) as exc:
+                out[k] = (None, f"{record.name}: {exc}")
+        elif record.image_path is not None and image_depth is not None:
+            images.append(k)
+        else:
+            out[k] = (None, f"{record.name}: no depth map and no depth network for its image "
+                            f"{record.image_path}")
+    if images:
+        estimated = image_depth([(records[k].key, records[k].image_path) for k in images])
+        for k, depth in zip(images, estimated):
+            out[k] = ((depth, str(records[k].image_path)) if isinstance(depth, np.ndarray)
+                      else (None, f"{records[k].name}: {depth}"))
+    return out
+
+
 def _result(record: FrameRecord, condition: str, **outcome) -> FrameResult:
     return FrameResult(record.scene, condition, record.key, record.index, record.timestamp, record.token,
                        record.has_ground_truth, **outcome)
@@ -200,28 +233,8 @@ class ChunkProcessor:
         return self.observe(records, self.depths(records), chunk.condition)
 
     def depths(self, records: list[FrameRecord]) -> list[tuple[np.ndarray | None, str]]:
-        """Per record ``(depth, source)``, or ``(None, error message)``."""
-        out: list[tuple[np.ndarray | None, str] | None] = [None] * len(records)
-        images = []
-        for k, record in enumerate(records):
-            if record.depth is not None:
-                out[k] = (record.depth, "memory")
-            elif record.depth_path is not None:
-                try:
-                    out[k] = (load_depth(record.depth_path, png_scale=record.png_scale), str(record.depth_path))
-                except (ValueError, OSError) as exc:
-                    out[k] = (None, f"{record.name}: {exc}")
-            elif record.image_path is not None and self.image_depth is not None:
-                images.append(k)
-            else:
-                out[k] = (None, f"{record.name}: no depth map and no depth network for its image "
-                                f"{record.image_path}")
-        if images:
-            estimated = self.image_depth([(records[k].key, records[k].image_path) for k in images])
-            for k, depth in zip(images, estimated):
-                out[k] = ((depth, str(records[k].image_path)) if isinstance(depth, np.ndarray)
-                          else (None, f"{records[k].name}: {depth}"))
-        return out
+        """Per record ``(depth, source)``, or ``(None, error message)`` (:func:`resolve_depths`)."""
+        return resolve_depths(records, self.image_depth)
 
     def observe(self, records: list[FrameRecord], depths: list[tuple[np.ndarray | None, str]],
                 condition: str) -> list[FrameResult]:
