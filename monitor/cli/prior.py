@@ -2,7 +2,7 @@
 
 Streams the depth maps of DEPTH_DIR (``.npy`` metres or 16-bit ``.png``, see
 :mod:`monitor.depth.files`) in sorted frame order through :class:`monitor.depth.prior.InverseDepthPrior`
-(constant memory) and writes the per-pixel mean of 1/D over valid samples as float32
+(constant memory; in parts on ``--workers`` processes or ``--ray``, the same prior bit for bit) and writes the per-pixel mean of 1/D over valid samples as float32
 ``.npy`` (1/m, NaN where no frame had a valid depth).
 """
 from __future__ import annotations
@@ -13,7 +13,8 @@ import numpy as np
 from tqdm import tqdm
 
 from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
-from monitor.depth.prior import build_prior, save_prior
+from monitor.cli.scenes import add_parallel_arguments
+from monitor.depth.prior import prior_of_files, save_prior
 
 HELP = "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"
 
@@ -30,6 +31,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     build.add_argument("-o", "--output", required=True, metavar="PRIOR.npy", help="where to write the prior")
     build.add_argument("--png-scale", type=float, default=KITTI_PNG_SCALE,
                        help="stored PNG value per metre (default %(default)g, KITTI)")
+    add_parallel_arguments(build)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -37,8 +39,10 @@ def run(args: argparse.Namespace) -> int:
     folder = DepthFolder(args.depth_dir, png_scale=args.png_scale)
     if len(folder) == 0:
         raise ValueError(f"no depth maps (.npy or .png) in {folder.root}")
-    frames = tqdm(folder.frames, unit="frame", desc="prior", disable=None)
-    accumulator = build_prior((str(folder.path(frame)), folder[frame]) for frame in frames)
+    bar = tqdm(total=len(folder), unit="frame", desc="prior", disable=None)
+    accumulator = prior_of_files([folder.path(frame) for frame in folder.frames], folder.png_scale,
+                                 workers=args.workers, ray=args.ray, progress=bar.update)
+    bar.close()
     save_prior(args.output, accumulator.mean())
     count = accumulator.count
     height, width = accumulator.shape

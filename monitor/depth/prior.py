@@ -16,14 +16,20 @@ over 2 x 2 blocks, and only a block without any prior is invalid). Where validit
 that drops far returns) the mean over the valid samples is biased towards near values;
 :attr:`InverseDepthPrior.count` is kept so that callers can inspect the support.
 
-Memory is constant in the number of frames: two (H, W) arrays.
+Memory is constant in the number of frames: two (H, W) arrays. Accumulators of parts of the
+frames merge (:meth:`InverseDepthPrior.merge`): :func:`prior_of_files` builds a prior on
+several processes or on Ray.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
+
+from monitor.depth.files import load_depth
+from monitor.offline.parallel import ordered_map
 
 
 class InverseDepthPrior:
@@ -74,6 +80,20 @@ class InverseDepthPrior:
         self.count += valid
         self.n_frames += 1
 
+    def merge(self, other: "InverseDepthPrior") -> None:
+        """Add the frames another accumulator has seen (the same size, or this one still empty)."""
+        if other.n_frames == 0:
+            return
+        if self.shape is None:
+            self.shape, self.count, self._sum = other.shape, other.count.copy(), other._sum.copy()
+        elif other.shape != self.shape:
+            raise ValueError(f"cannot merge a prior of {other.shape[1]}x{other.shape[0]} (W x H) into one of "
+                             f"{self.shape[1]}x{self.shape[0]}; every frame must have the same size")
+        else:
+            self._sum += other._sum
+            self.count += other.count
+        self.n_frames += other.n_frames
+
     def mean(self) -> np.ndarray:
         """The prior: float32 (H, W) mean inverse depth in 1/m, NaN where never valid."""
         if self.n_frames == 0:
@@ -100,6 +120,43 @@ def build_prior(depths: Iterable[tuple[str, np.ndarray]]) -> InverseDepthPrior:
     if prior.n_frames == 0:
         raise ValueError("no depth maps given; the prior needs at least one training frame")
     return prior
+
+
+#: depth files per part of :func:`prior_of_files` (the parts, not the workers, fix the order
+#: of the float64 sums: any number of workers gives the same prior, bit for bit)
+PRIOR_PART_FILES = 32
+
+
+@dataclass(frozen=True)
+class PriorPart:
+    """A picklable job for workers: ``build()`` returns a function that accumulates a list of
+    depth files (:func:`monitor.depth.files.load_depth`, PNGs at ``png_scale``) into an
+    :class:`InverseDepthPrior`."""
+
+    png_scale: float
+
+    def build(self):
+        def accumulate(paths: list) -> InverseDepthPrior:
+            return build_prior((str(path), load_depth(path, png_scale=self.png_scale)) for path in paths)
+        return accumulate
+
+
+def prior_of_files(paths: list, png_scale: float, *, workers: int = 1, ray: str | None = None,
+                   progress=None) -> InverseDepthPrior:
+    """The prior of depth files, in parts of :data:`PRIOR_PART_FILES` on ``workers`` processes or Ray.
+
+    The parts are merged in order, so the result does not depend on ``workers`` or ``ray``.
+    ``progress(n)`` is called with the files of each part done.
+    """
+    parts = [list(paths[a:a + PRIOR_PART_FILES]) for a in range(0, len(paths), PRIOR_PART_FILES)]
+    total = InverseDepthPrior()
+    for part, partial in zip(parts, ordered_map(PriorPart(png_scale), parts, workers=workers, ray=ray)):
+        total.merge(partial)
+        if progress is not None:
+            progress(len(part))
+    if total.n_frames == 0:
+        raise ValueError("no depth maps given; the prior needs at least one training frame")
+    return total
 
 
 def save_prior(path: str | Path, prior: np.ndarray) -> None:

@@ -16,6 +16,7 @@ used as it is.
 from __future__ import annotations
 
 import dataclasses
+import socket
 from typing import Iterable, Iterator
 
 import numpy as np
@@ -33,11 +34,32 @@ def _ray():
     return ray
 
 
+#: seconds to wait for a cluster address to accept a connection (Ray itself waits minutes)
+CONNECT_TIMEOUT_S = 5.0
+
+
+def check_address(address: str) -> None:
+    """An error naming ``address`` unless it is ``HOST:PORT`` (or ``ray://HOST:PORT``) and a TCP
+    connection to it opens within :data:`CONNECT_TIMEOUT_S` (Ray's own attempt would hang for minutes)."""
+    hostport = address.split("://", 1)[1] if "://" in address else address
+    host, _, port = hostport.rpartition(":")
+    if not host or not port.isdigit():
+        raise ValueError(f"--ray {address!r}: expected 'auto' or a cluster address HOST:PORT "
+                         "(e.g. 10.0.0.5:6379, or ray://10.0.0.5:10001 for Ray Client)")
+    try:
+        socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        raise ValueError(f"--ray {address}: no Ray cluster answers there ({exc}); start one with "
+                         "'ray start --head', give its address, or use --ray auto") from None
+
+
 def connect(address: str):
     """Initialise Ray (unless it is) against ``address``; the ``ray`` module."""
     ray = _ray()
     if ray.is_initialized():
         return ray
+    if address != "auto":
+        check_address(address)
     try:
         ray.init(address=None if address == "auto" else address, include_dashboard=False,
                  log_to_driver=False, ignore_reinit_error=True)
