@@ -4,11 +4,16 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
+import onnx
 import yaml
+from onnx import TensorProto, helper
 
 from monitor.depth.prior import build_prior, save_prior
-from monitor.synthetic import generate_frames
+from monitor.synthetic import generate_frames, shade
+
+A, B = 20.0, 2.0  # the tiny depth model: depth = A * mean over channels of RGB / 255 + B metres
 
 
 def _boxes(boxes, extra):
@@ -59,3 +64,26 @@ def read_rows(out: Path) -> dict[str, list[dict]]:
         rows[path.name] = [{k: v for k, v in json.loads(line).items() if k != "timings_ms"}
                            for line in path.read_text().splitlines()]
     return rows
+
+
+def write_images(folder: Path, frames) -> None:
+    """The frames' shaded camera images as ``images/<key>.png``."""
+    (folder / "images").mkdir()
+    for f in frames:
+        cv2.imwrite(str(folder / "images" / f"{f.index:06d}.png"), shade(f)[:, :, ::-1])
+
+
+def mean_model(path, batch="N", output_shape=None):
+    """A tiny ONNX depth model: depth = A * mean_c(x) + B for input (batch, 3, 32, 64), output
+    (batch, 1, 32, 64) (the zoedepth preset: x = RGB / 255)."""
+    nodes = [helper.make_node("ReduceMean", ["image"], ["m"], axes=[1], keepdims=1),
+             helper.make_node("Mul", ["m", "a"], ["am"]), helper.make_node("Add", ["am", "b"], ["depth"])]
+    graph = helper.make_graph(
+        nodes, "tiny", [helper.make_tensor_value_info("image", TensorProto.FLOAT, [batch, 3, 32, 64])],
+        [helper.make_tensor_value_info("depth", TensorProto.FLOAT, output_shape or [batch, 1, 32, 64])],
+        initializer=[helper.make_tensor("a", TensorProto.FLOAT, [], [A]),
+                     helper.make_tensor("b", TensorProto.FLOAT, [], [B])])
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, str(path))
+    return path

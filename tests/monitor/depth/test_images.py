@@ -10,26 +10,7 @@ from onnx import TensorProto, helper
 from monitor.cli import main
 from monitor.depth.images import DepthModel, read_image
 from monitor.depth.onnx_model import OnnxDepthEstimator
-from monitor.synthetic import shade
-from recording_fixture import read_rows, write_prior, write_recording
-
-A, B = 20.0, 2.0  # the tiny model: depth = A * mean over channels of RGB / 255 + B metres
-
-
-def mean_model(path, batch="N", output_shape=None):
-    """depth = A * mean_c(x) + B for input (batch, 3, 32, 64); output (batch, 1, 32, 64)."""
-    nodes = [helper.make_node("ReduceMean", ["image"], ["m"], axes=[1], keepdims=1),
-             helper.make_node("Mul", ["m", "a"], ["am"]), helper.make_node("Add", ["am", "b"], ["depth"])]
-    graph = helper.make_graph(
-        nodes, "tiny", [helper.make_tensor_value_info("image", TensorProto.FLOAT, [batch, 3, 32, 64])],
-        [helper.make_tensor_value_info("depth", TensorProto.FLOAT, output_shape or [batch, 1, 32, 64])],
-        initializer=[helper.make_tensor("a", TensorProto.FLOAT, [], [A]),
-                     helper.make_tensor("b", TensorProto.FLOAT, [], [B])])
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
-    model.ir_version = 8
-    onnx.save(model, str(path))
-    return path
-
+from recording_fixture import A, B, mean_model, read_rows, write_images, write_prior, write_recording
 
 def doubled_model(path):
     """A model that answers one image with two maps: output (2, 1, 32, 64)."""
@@ -87,9 +68,7 @@ def test_unreadable_images_are_named_and_do_not_stop_the_batch(tmp_path):
 def image_recording(tmp_path_factory):
     root = tmp_path_factory.mktemp("img")
     frames = write_recording(root / "drive", n_frames=3, depth=False)
-    (root / "drive" / "images").mkdir()
-    for f in frames:
-        cv2.imwrite(str(root / "drive" / "images" / f"{f.index:06d}.png"), shade(f)[:, :, ::-1])
+    write_images(root / "drive", frames)
     return root, write_prior(root / "prior.npy", frames), mean_model(root / "m.onnx")
 
 
