@@ -19,6 +19,8 @@ COMMANDS = {
     "prior": "monitor.cli.prior",
     "convert": "monitor.cli.convert",
     "tune": "monitor.cli.tune",
+    "check": "monitor.cli.check",
+    "plot": "monitor.cli.plot",
 }
 
 
