@@ -159,7 +159,7 @@ class Axis:
         p = self.points
         lo = p[first // 2]
         hi = p[last // 2] if last % 2 == 0 else p[last // 2 + 1]
-        return float(lo), float(hi), first % 2 == 0, last % 2 == 0
+        return float(lo), float(hi), bool(first % 2 == 0), bool(last % 2 == 0)
 
 
 def build_axis(var, levels: np.ndarray, tol: float) -> Axis:

@@ -117,7 +117,7 @@ def decompose(fis, threshold: float, tol: float, max_cells: int) -> Cells:
         method = f"cell boundaries of smooth terms bisected to {tol:g} of each range"
     else:
         method = "exact (piecewise-linear terms)"
-    return Cells(tuple(axes), strongest.reshape(shape), rule_max, method, exact_levels and not smooth)
+    return Cells(tuple(axes), strongest.reshape(shape), rule_max, method, bool(exact_levels and not smooth))
 
 
 @dataclass(frozen=True)
@@ -227,4 +227,4 @@ def coverage(cells: Cells, threshold: float, max_regions: int = 20) -> Coverage:
     regions.sort(key=lambda r: (-r.share, -r.dimension))
     return Coverage(threshold=threshold, method=cells.method, exact=cells.exact,
                     uncovered_share=float(volumes[mask].sum()), n_uncovered_cells=int(mask.sum()),
-                    regions=tuple(regions), complete=not remaining.any(), n_cells=cells.n_cells)
+                    regions=tuple(regions), complete=bool(not remaining.any()), n_cells=cells.n_cells)

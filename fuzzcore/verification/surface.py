@@ -102,7 +102,7 @@ class Monotonicity:
 
     @property
     def holds(self) -> bool:
-        return not self.drop > self.tol
+        return bool(not self.drop > self.tol)
 
     def to_dict(self) -> dict:
         return {"input": self.input, "output": self.output, "direction": self.direction, "holds": self.holds,
@@ -204,7 +204,7 @@ def monotonicity(fis, axes, lines: Lines, direction: int, rel_tol: float, n_refi
         point, ta, tb, values = best[1]
         start, end = point.copy(), point.copy()
         start[axis], end[axis] = ta, tb
-        out.append(Monotonicity(names[axis], var.name, direction, max(best[0], 0.0),
+        out.append(Monotonicity(names[axis], var.name, direction, float(max(best[0], 0.0)),
                                 dict(zip(names, start.tolist())), dict(zip(names, end.tolist())),
                                 values, tol, lines.X.shape[0], lines.n_possible, n_eval))
     return out
@@ -247,7 +247,8 @@ def steepest(fis, axes, lines: Lines, rel_tol: float) -> list[Steepest]:
         t = lines.X[:, :, axis]
         dy = np.abs(np.diff(y, axis=1))
         dt = np.diff(t, axis=1)
-        slope = np.where(np.isnan(dy), -np.inf, dy / dt)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            slope = np.where(np.isnan(dy) | ~(dt > 0), -np.inf, dy / dt)
         if not np.isfinite(slope).any():
             continue
         line, i = np.unravel_index(int(np.argmax(slope)), slope.shape)
