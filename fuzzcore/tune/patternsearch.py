@@ -98,8 +98,8 @@ class PatternSearch(Tuner):
     method = "patternsearch"
 
     def __init__(self, system, *, variables=None, keep_order=True, partition=True, require_firing=True,
-                 metric="rmse", n_folds=5, max_iter=1000, initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-5, stall_iter=20, complete_poll=False,
-                 validation_tol=0.1, validation_window=5, seed=None, callback=None):
+                 metric="rmse", n_folds=5, max_iter=1000, initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-5, stall_iter=20,
+                 complete_poll=False, validation_tol=0.1, validation_window=5, seed=None, callback=None):
         self.system = system
         self.variables = variables
         self.keep_order = keep_order

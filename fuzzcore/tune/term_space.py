@@ -38,7 +38,8 @@ term's corners (left foot a, left shoulder b, right shoulder c, right foot d) an
   neighbours cross at h or above (``(1-h) a' + h b' <= (1-h) d + h c`` for a term and the
   next), so some term is at least h everywhere and every rule grid covers the whole box;
 - bounded overlap: neighbours cross at :data:`SEPARATION` or below (the same inequality
-  the other way at that level: neither is nearly 1 where the other is), a term rises only after the previous one's core begins (``a' >= b``)
+  the other way at that level: neither is nearly 1 where the other is), a term rises only
+  after the previous one's core begins (``a' >= b``)
   and falls before the next one's core ends (``d <= c'``), and no point is in three
   terms (``d <= a''`` for a term and the one after next);
 - bounded width: a term's support within the range is at most :data:`MAX_WIDTH` of it.
@@ -273,7 +274,7 @@ class TermSpace:
         if d1 is not None:
             add([(d1, -(1 - h)), (c1, -h)], -hi, f"{label[-1]} is at least {h:g} at {var.name}'s high end {hi:g}")
         for k in range(len(corners) - 1):
-            (a, b, c, d), (a2, b2, c2, d2) = corners[k], corners[k + 1]
+            (a, b, c, d), (a2, b2, c2, _) = corners[k], corners[k + 1]
             if d is not None and a2 is not None:
                 add([(a2, 1 - h), (b2, h), (d, -(1 - h)), (c, -h)], 0.0,
                     f"{label[k]} and {label[k + 1]} cross at {h:g} or above")

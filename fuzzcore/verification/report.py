@@ -99,7 +99,7 @@ class Report:
         c = self.coverage
         what = "fires no rule" if c.threshold == 0 else f"fires no rule at strength >= {c.threshold:g}"
         if c.covered:
-            lines.append(f"coverage: every point of the input box fires a rule"
+            lines.append("coverage: every point of the input box fires a rule"
                          + ("" if c.threshold == 0 else f" at strength >= {c.threshold:g}")
                          + f" ({c.method}; {c.n_cells} cells)")
         else:

@@ -26,7 +26,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--output", required=True, metavar="OUT.png", help="where to write the figure")
     parser.add_argument("--monotone", nargs="+", default=[], metavar="INPUT:+|-",
                         help="declared monotonicity to check and mark, e.g. rdd:+")
-    parser.add_argument("--resolution", type=int, default=121, help="surface grid points per input (default %(default)s)")
+    parser.add_argument("--resolution", type=int, default=121,
+                        help="surface grid points per input (default %(default)s)")
 
 
 def _draw(fis, report, monotone: dict, resolution: int):
