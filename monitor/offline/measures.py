@@ -369,3 +369,68 @@ def depth_view_quality(truth: Sequence[FrameTruth]) -> dict:
     for status in STATUSES:
         out[status] = sum(t.status == status for t in truth) / n if n else float("nan")
     return out
+
+
+def training_mean(train: Sequence[FrameTruth], test: Sequence[FrameTruth]) -> tuple[float, str]:
+    """The constant predictor's value, and a sentence saying where it comes from.
+
+    The mean target of the training frames; when there are none with a target (scenes on
+    disk have no split), the test frames' own mean, which the sentence says (it flatters
+    the constant, so skill is harder to earn).
+    """
+    values = np.array([t.target for t in train], dtype=np.float64)
+    values = values[np.isfinite(values)]
+    if values.size:
+        return float(values.mean()), f"the mean target of {values.size} training frames"
+    values = np.array([t.target for t in test], dtype=np.float64)
+    values = values[np.isfinite(values)]
+    if values.size:
+        return float(values.mean()), (f"no training frames: the mean target of the {values.size} "
+                                      "evaluated frames themselves (flatters the constant)")
+    return float("nan"), "no frame has a target"
+
+
+def quality_tables(observations: Sequence[Observation], truth: Sequence[FrameTruth], systems: dict,
+                   reference: float, threshold: float, fail_safe_risk: float
+                   ) -> tuple[list[dict], list[dict], dict]:
+    """The headline tables, per condition (in order of appearance) and over all frames.
+
+    Parameters
+    ----------
+    observations : sequence of Observation
+    truth : sequence of FrameTruth
+        :func:`frame_truth` of each observation.
+    systems : dict of str -> FuzzySystem
+        Rule bases to measure (inputs ``iou`` and ``rdd``).
+    reference : float
+        The constant predictor's value (:func:`training_mean`).
+    threshold, fail_safe_risk : float
+        The shield threshold; the risk of a frame a rule base gives NaN.
+
+    Returns
+    -------
+    risk_rows : list of dict
+        :func:`risk_quality` with ``condition`` and ``predictor``, the constant predictor
+        first in each condition (left out when ``reference`` is NaN).
+    depth_rows : list of dict
+        :func:`depth_view_quality` with ``condition``.
+    risks : dict of str -> ndarray of shape (n_frames,)
+        Each predictor's risk per observation.
+    """
+    if len(observations) != len(truth):
+        raise ValueError(f"{len(observations)} observations but {len(truth)} FrameTruth; expected one each")
+    risks = {}
+    if np.isfinite(reference):
+        risks[f"constant {reference:.3f}"] = np.full(len(observations), reference)
+    risks.update({name: rule_base_risk(observations, fis, fail_safe_risk) for name, fis in systems.items()})
+    conditions = list(dict.fromkeys(ob.condition for ob in observations))
+    groups = [(c, np.array([ob.condition == c for ob in observations], dtype=bool)) for c in conditions]
+    groups.append(("all", np.ones(len(observations), dtype=bool)))
+    risk_rows, depth_rows = [], []
+    for condition, mask in groups:
+        frames = [t for t, m in zip(truth, mask) if m]
+        depth_rows.append({"condition": condition, **depth_view_quality(frames)})
+        for name, r in risks.items():
+            risk_rows.append({"condition": condition, "predictor": name,
+                              **risk_quality(r[mask], frames, reference, threshold)})
+    return risk_rows, depth_rows, risks
