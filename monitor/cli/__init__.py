@@ -19,6 +19,7 @@ COMMANDS = {
     "prior": "monitor.cli.prior",
     "convert": "monitor.cli.convert",
     "tune": "monitor.cli.tune",
+    "bench": "monitor.cli.bench",
 }
 
 

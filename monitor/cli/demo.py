@@ -127,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
 
     rows, series, obs_by_condition, riskiest, split = [], [], {}, {}, []
     for scene in bench.scenes():
-        shield = Shield.from_config(config.shield)
+        shield = Shield(config.shield)
         times, risks, targets, statuses = [], [], [], []
         for frame in scene.frames:
             ob = observe(monitor, frame, scene.name, scene.condition)
@@ -194,7 +194,7 @@ def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) ->
         f"- Rule base: `{rules_path}` ({fis.name}, {len(fis.rules)} rules, {fis.defuzzifier}).",
         f"- Scenes: {bench.scenes_per_condition} per condition x {bench.n_frames} frames at 2 Hz, seed {bench.seed}; "
         f"prior from {bench.prior_scenes} separate nominal scenes.",
-        f"- Matching: IoU > {config.alpha}, |RDD| < {config.beta}; objects within {config.max_range:g} m; "
+        f"- Matching: IoU > {config.alignment.alpha}, |RDD| < {config.alignment.beta}; objects within {config.max_range:g} m; "
         f"shield threshold {config.shield.threshold}.",
         f"- Run time: {elapsed:.1f} s.", "",
         "## Per condition", "",

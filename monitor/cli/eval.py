@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
         "analysis": [], "rmse": rmse_table(test, systems),
     }
     for condition, obs in groups.items():
-        counts = detection_analysis(obs, config.alpha, config.beta)
+        counts = detection_analysis(obs, config.alignment.alpha, config.alignment.beta)
         tables["analysis"].append({
             "condition": condition, "scenes": len({ob.scene for ob in obs}),
             "gts": counts["tps"] + counts["fns"],
@@ -151,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
          f"{criterion.min_dr}), share of frames per status", depth_view, DEPTH_VIEW),
         ("Table I: correlation of S-based and G-based features (all frames)", tables["correlation"], CORRELATION),
         ("Table II: recall of the ground truth by S and by P", tables["recall"], RECALL),
-        (f"Table III: the depth view over the detector's TPs and FNs (alpha {config.alpha}, beta {config.beta})",
+        (f"Table III: the depth view over the detector's TPs and FNs (alpha {config.alignment.alpha}, beta {config.alignment.beta})",
          tables["analysis"], ANALYSIS),
         (f"Rule bases against 1 - USC~ on the {len(test_names)} held-out test scenes", tables["rmse"], RMSE),
     ]

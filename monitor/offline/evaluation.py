@@ -62,7 +62,7 @@ def observe(monitor: RiskMonitor, frame: Frame, scene: str, condition: str) -> O
     """Run ``monitor`` on ``frame`` and measure the frame against its ground truth."""
     report = monitor.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
     visible = frame.gt_boxes3d[frame.gt_visibility > 0]
-    G, _ = project_boxes(visible, monitor.camera, monitor.config.distance)
+    G, _ = project_boxes(visible, monitor.camera, monitor.config.detections.distance)
     G = within_range(G, monitor.config.max_range)
     P = report.P
     if report.status == INVALID_INPUT:  # the depth failed: score the detections all the same
