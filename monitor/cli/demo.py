@@ -95,7 +95,7 @@ def _quality(split: list, fis, name: str, config, out: Path) -> dict:
     reference, note = training_mean([frame_truth(ob) for ob in train], test_truth)
     threshold = config.shield.threshold
     risk_rows, depth_rows, risks = quality_tables(test, test_truth, {name: fis}, reference, threshold,
-                                                  config.fail_safe_risk)
+                                                  config.risk.fail_safe)
     depth = {r["condition"]: r for r in depth_rows}
     rows = [{**r, "recall": depth[r["condition"]]["recall"], "precision": depth[r["condition"]]["precision"]}
             if r["predictor"] == name else r for r in risk_rows]

@@ -114,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
     reference, reference_note = training_mean(train_truth, test_truth)
     threshold = config.shield.threshold
     quality, depth_view, risks = quality_tables(test, test_truth, systems, reference, threshold,
-                                                config.fail_safe_risk)
+                                                config.risk.fail_safe)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     shipped = shipped_rules().name if shipped_rules().name in risks else next(iter(systems))
