@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import operator
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -19,6 +20,7 @@ from . import _kernels as K
 from .compiled import (AGGREGATIONS, AND_METHODS, IMPLICATIONS, MAMDANI_DEFUZZIFIERS,
                        OR_METHODS, POLICIES, SUGENO_DEFUZZIFIERS, SYSTEMS, Layout, pack)
 from .errors import RuleBaseError
+from .inputs import REAL_SCALARS, real_array
 from .membership import PIECEWISE_LINEAR, resolve_kind
 from .rules import Rule, format_rule
 from .variables import Variable
@@ -27,9 +29,23 @@ from .variables import Variable
 PARALLEL_THRESHOLD = 4 * K.CHUNK
 
 
-def _choice(value: Any, choices: Mapping[str, int], what: str) -> None:
+def _choice(value: Any, choices: Mapping[str, int], what: str, of: str = "") -> None:
+    """Refuse ``value`` of setting ``what`` unless among ``choices`` (``of`` says whose choices)."""
     if value not in choices:
-        raise RuleBaseError(f"{what} {value!r}: expected one of {', '.join(choices)}", place=what)
+        raise RuleBaseError(f"{value!r}: expected one of {', '.join(choices)}{of}", place=what)
+
+
+def _floats(values: Sequence[Any]) -> tuple[float, ...] | None:
+    """``values`` as Python floats if every one is a real scalar of a type in
+    :data:`~fuzzcore.inputs.REAL_SCALARS` that fits a float64; else None (the caller then
+    takes the checked path, which explains what is wrong)."""
+    for v in values:  # a loop, not all(...): no generator on the scalar path
+        if type(v) not in REAL_SCALARS:
+            return None
+    try:
+        return tuple(map(float, values))
+    except OverflowError:  # an int beyond float64
+        return None
 
 
 @dataclass(frozen=True)
@@ -100,8 +116,8 @@ class FuzzySystem:
         _choice(self.implication, IMPLICATIONS, "implication")
         _choice(self.aggregation, AGGREGATIONS, "aggregation")
         mamdani = self.type == "mamdani"
-        _choice(self.defuzzifier, MAMDANI_DEFUZZIFIERS if mamdani else SUGENO_DEFUZZIFIERS,
-                f"defuzzifier (for a {self.type} system)")
+        _choice(self.defuzzifier, MAMDANI_DEFUZZIFIERS if mamdani else SUGENO_DEFUZZIFIERS, "defuzzifier",
+                f" (the defuzzifiers of a {self.type} system)")
         if isinstance(self.resolution, bool) or not isinstance(self.resolution, numbers.Integral) \
                 or self.resolution < 2:
             raise RuleBaseError(f"resolution {self.resolution!r}: expected an integer >= 2", place="resolution")
@@ -166,6 +182,12 @@ class FuzzySystem:
                 if self.defuzzifier == "centroid_exact" and kind.name not in PIECEWISE_LINEAR:
                     raise RuleBaseError(f"{kind.name} is not piecewise linear; centroid_exact needs one of "
                                         f"{', '.join(sorted(PIECEWISE_LINEAR))}", place=where)
+        if self.type == "mamdani":
+            for var in self.outputs:
+                lo, hi = var.range
+                if not math.isfinite((self.resolution - 1) * (hi - lo)):
+                    raise RuleBaseError(f"range [{lo!r}, {hi!r}] is degenerate for a grid of {self.resolution} "
+                                        "points: (resolution - 1) * (hi - lo) overflows", place=f"outputs.{var.name}")
         if self.defuzzifier == "centroid_exact" and self.aggregation == "probor":
             raise RuleBaseError("centroid_exact needs aggregation 'max' or 'sum' (probor is not "
                                 "piecewise linear)", place="aggregation")
@@ -232,24 +254,36 @@ class FuzzySystem:
         name (``fis.infer(iou=..., rdd=...)``). Scalars give a float (single output) or an
         ndarray of shape (n_out,); arrays broadcast against each other and give an ndarray
         of the broadcast shape (single output) or broadcast shape + (n_out,).
+
+        Inputs are real numbers (Python or NumPy integers and floats, NaN and inf included)
+        or arrays of them. ``None``, text, ``bool``, complex numbers, dates, time spans,
+        masked arrays and object arrays raise ``TypeError`` naming the input; a number too
+        large for a float64 raises ``ValueError`` (:func:`fuzzcore.inputs.real_array`).
         """
-        if not kwargs and len(args) == self._fast_arity:
-            for a in args:  # the compiled scalar path takes Python floats (a loop: no generator)
-                if type(a) is not float:
-                    break
-            else:
-                return self._fast(args, self._fblob, self._iblob)
+        if not kwargs:
+            if len(args) == self._fast_arity:
+                for a in args:  # the compiled scalar path takes Python floats (a loop: no generator)
+                    if type(a) is not float:
+                        break
+                else:
+                    return self._fast(args, self._fblob, self._iblob)
+                xs = _floats(args)
+                if xs is not None:
+                    return self._fast(xs, self._fblob, self._iblob)
+        elif not args and len(kwargs) == self._fast_arity:
+            try:  # as many names as inputs, each found: exactly the inputs
+                xs = _floats(self._by_name(kwargs))
+            except KeyError:
+                xs = None
+            if xs is not None:
+                return self._fast(xs, self._fblob, self._iblob)
         values = self._inputs(args, kwargs)
-        if len(self.outputs) == 1 and all(type(v) is float for v in values):
-            fast = self._fast if self._fast is not None else self._bind_fast()
-            return fast(tuple(values), self._fblob, self._iblob)
-        arrays = []
-        for name, value in zip(self.input_names, values):
-            try:
-                arrays.append(np.asarray(value, dtype=np.float64))
-            except (TypeError, ValueError):
-                raise TypeError(f"input {name!r}: expected a number or an array of numbers, "
-                                f"got {value!r}") from None
+        if len(self.outputs) == 1:
+            xs = _floats(values)
+            if xs is not None:
+                fast = self._fast if self._fast is not None else self._bind_fast()
+                return fast(xs, self._fblob, self._iblob)
+        arrays = [real_array(value, f"input {name!r}") for name, value in zip(self.input_names, values)]
         try:
             arrays = np.broadcast_arrays(*arrays)
         except ValueError:
@@ -274,7 +308,7 @@ class FuzzySystem:
         -------
         ndarray of shape (n_samples, n_outputs)
         """
-        X = np.asarray(X, dtype=np.float64)
+        X = real_array(X, "X")
         if X.ndim != 2 or X.shape[1] != len(self.inputs):
             raise ValueError(f"X has shape {X.shape}, expected (n_samples, {len(self.inputs)}) "
                              f"with columns {', '.join(self.input_names)}")
@@ -289,10 +323,11 @@ class FuzzySystem:
     def explain(self, *args: Any, **kwargs: Any) -> "Explanation":
         """Evaluate one sample and say why: memberships, rule strengths, aggregated sets."""
         values = self._inputs(args, kwargs)
-        try:
-            x = np.array([[float(v) for v in values]])
-        except (TypeError, ValueError):
-            raise TypeError(f"explain takes one sample: a number per input, got {values!r}") from None
+        arrays = [real_array(value, f"input {name!r}") for name, value in zip(self.input_names, values)]
+        shaped = [f"{name}{a.shape}" for name, a in zip(self.input_names, arrays) if a.shape != ()]
+        if shaped:
+            raise TypeError(f"explain takes one sample, a number per input; got arrays: {', '.join(shaped)}")
+        x = np.array([[float(a) for a in arrays]])
         layout = self._layout
         mu = np.empty(layout.n_terms_in)
         fire = np.empty(layout.n_rules)
@@ -338,7 +373,10 @@ class FuzzySystem:
         K.infer_one(args, self._fblob, self._iblob)
         signature = (numba.typeof(args), numba.typeof(self._fblob), numba.typeof(self._iblob))
         fast = K.infer_one.overloads[signature].entry_point
+        names = self.input_names
+        by_name = operator.itemgetter(*names) if len(names) > 1 else (lambda kwargs: (kwargs[names[0]],))
         object.__setattr__(self, "_fast", fast)
+        object.__setattr__(self, "_by_name", by_name)
         object.__setattr__(self, "_fast_arity", len(self.inputs) if len(self.outputs) == 1 else -1)
         return fast
 
@@ -347,6 +385,7 @@ class FuzzySystem:
         state = dict(self.__dict__)
         state["_fast"] = None
         state.pop("_fast_arity", None)
+        state.pop("_by_name", None)
         return state
 
     def save(self, path) -> None:
