@@ -35,19 +35,6 @@ def _choice(value: Any, choices: Mapping[str, int], what: str, of: str = "") -> 
         raise RuleBaseError(f"{value!r}: expected one of {', '.join(choices)}{of}", place=what)
 
 
-def _floats(values: Sequence[Any]) -> tuple[float, ...] | None:
-    """``values`` as Python floats if every one is a real scalar of a type in
-    :data:`~fuzzcore.inputs.REAL_SCALARS` that fits a float64; else None (the caller then
-    takes the checked path, which explains what is wrong)."""
-    for v in values:  # a loop, not all(...): no generator on the scalar path
-        if type(v) not in REAL_SCALARS:
-            return None
-    try:
-        return tuple(map(float, values))
-    except OverflowError:  # an int beyond float64
-        return None
-
-
 @dataclass(frozen=True)
 class FuzzySystem:
     """A Mamdani or Takagi-Sugeno fuzzy inference system, MATLAB's semantics.
@@ -260,29 +247,39 @@ class FuzzySystem:
         masked arrays and object arrays raise ``TypeError`` naming the input; a number too
         large for a float64 raises ``ValueError`` (:func:`fuzzcore.inputs.real_array`).
         """
+        # the scalar path: real scalars of the exact types in REAL_SCALARS go straight to the
+        # compiled entry point, which converts each as float() would (a loop: no generator)
         if not kwargs:
             if len(args) == self._fast_arity:
-                for a in args:  # the compiled scalar path takes Python floats (a loop: no generator)
-                    if type(a) is not float:
+                for a in args:
+                    if type(a) not in REAL_SCALARS:
                         break
                 else:
-                    return self._fast(args, self._fblob, self._iblob)
-                xs = _floats(args)
-                if xs is not None:
-                    return self._fast(xs, self._fblob, self._iblob)
+                    try:
+                        return self._fast(args, self._fblob, self._iblob)
+                    except (TypeError, OverflowError):  # an int beyond float64: named below
+                        pass
         elif not args and len(kwargs) == self._fast_arity:
             try:  # as many names as inputs, each found: exactly the inputs
-                xs = _floats(self._by_name(kwargs))
+                values = self._by_name(kwargs)
             except KeyError:
-                xs = None
-            if xs is not None:
-                return self._fast(xs, self._fblob, self._iblob)
+                values = ()
+            for a in values:
+                if type(a) not in REAL_SCALARS:
+                    break
+            else:
+                if values:
+                    try:
+                        return self._fast(values, self._fblob, self._iblob)
+                    except (TypeError, OverflowError):
+                        pass
         values = self._inputs(args, kwargs)
-        if len(self.outputs) == 1:
-            xs = _floats(values)
-            if xs is not None:
-                fast = self._fast if self._fast is not None else self._bind_fast()
-                return fast(xs, self._fblob, self._iblob)
+        if len(self.outputs) == 1 and all(type(v) in REAL_SCALARS for v in values):
+            fast = self._fast if self._fast is not None else self._bind_fast()
+            try:
+                return fast(tuple(values), self._fblob, self._iblob)
+            except (TypeError, OverflowError):
+                pass
         arrays = [real_array(value, f"input {name!r}") for name, value in zip(self.input_names, values)]
         try:
             arrays = np.broadcast_arrays(*arrays)
@@ -367,7 +364,10 @@ class FuzzySystem:
         """Compile the scalar kernel for this input count and keep its compiled entry point.
 
         Calling the entry point skips Numba's per-call type dispatch (about half the cost
-        of a scalar call); the arguments are then always (tuple of floats, fblob, iblob).
+        of a scalar call); the arguments are then always (tuple, fblob, iblob), the tuple
+        holding scalars of the types in :data:`~fuzzcore.inputs.REAL_SCALARS`, which the
+        entry point converts as ``float()`` does (``PyNumber_Float``; it would also parse
+        text and take ``True`` as 1.0, hence the exact-type check before every call).
         """
         args = tuple(0.5 * sum(v.range) for v in self.inputs)
         K.infer_one(args, self._fblob, self._iblob)

@@ -56,6 +56,7 @@ from typing import Any
 import yaml
 
 from .errors import RuleBaseError
+from .membership import check_params, resolve_kind
 from .rules import CONNECTIVES, Rule, format_rule, parse_rule
 from .system import FuzzySystem
 from .variables import Term, Variable
@@ -180,9 +181,14 @@ class _Reader:
                                  tpath, terms, term_name)
             params = [self.number(v, tpath, terms, term_name) for v in term_spec[1:]]
             try:
-                built.append(Term(term_name, term_spec[0], params))
+                term = Term(term_name, term_spec[0], params)
             except (RuleBaseError, ValueError) as exc:
                 raise self.error(getattr(exc, "detail", str(exc)), tpath, terms, term_name) from None
+            kind = resolve_kind(term.kind)
+            problem = None if kind.n_params is None else check_params(kind, term.params)  # linear: in the system
+            if problem:
+                raise self.error(f"{kind.name} {list(term.params)}: {problem}", tpath, terms, term_name)
+            built.append(term)
         try:
             return Variable(name, (lo, hi), tuple(built))
         except RuleBaseError as exc:

@@ -133,7 +133,7 @@ def test_a_nan_sugeno_output_propagates_instead_of_the_midpoint(defuzzifier):
     assert fis.infer(2.0, 3.0) == 2.0
     # b = inf: 0 * inf = NaN, so z is NaN; the midpoint 5.0 would be a confident wrong number
     assert math.isnan(fis.infer(2.0, math.inf))
-    assert math.isnan(fis.evaluate(np.tile([2.0, math.inf], (600, 1)))[:, 0]).all()  # the batch path too
+    assert np.isnan(fis.evaluate(np.tile([2.0, math.inf], (600, 1)))[:, 0]).all()  # the batch path too
     # nothing fires at a = 20 (outside the trapezoid): the policy answers
     assert fis.infer(20.0, 3.0) == 5.0
 

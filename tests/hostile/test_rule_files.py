@@ -269,7 +269,7 @@ def test_an_output_with_no_terms_says_so(tmp_path):
     with pytest.raises(RuleBaseError, match=r"output 'y' has no terms \(terms: \{\}\)") as caught:
         fuzzcore.load(path)
     assert "has no term 'low'" not in str(caught.value)
-    assert str(caught.value).startswith(f"{path}: line 11, outputs.y.terms")
+    assert str(caught.value).startswith(f"{path}: line 10, outputs.y.terms")
 
 
 def test_the_end_line_is_what_dumps_writes():
