@@ -63,6 +63,8 @@ class FuzzySystem:
     no_rule_fired : "midpoint" | "nan" | float
         Output when no rule fires (empty aggregated set / all Sugeno weights 0):
         MATLAB's midpoint of the output range, NaN, or a fixed number. Never a silent 0.
+        Only an empty set takes it: any other NaN (a NaN membership, a Sugeno rule output
+        ``0 * inf``) gives NaN.
     description : str
     metadata : mapping
         Free provenance (e.g. how a tuned system was made); saved and loaded with the system.
