@@ -47,7 +47,7 @@ from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
-from monitor.synthetic import get_condition, render_depth
+from monitor.synthetic import Condition, get_condition, render_depth
 from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, detect, estimate_depth
 from monitor.synthetic.scene import EGO_FRONT_M, EGO_HALF_WIDTH_M
 
@@ -177,6 +177,8 @@ class Run:
         Class of what the ego hit ("" if nothing).
     impact_speed, closing_speed : float
         The ego's speed and the speed at which it closed in on what it hit, m/s (0 without).
+    final_gap : float
+        Gap to the hazard when the run ended, metres (0 at a collision with it; NaN without).
     trip_time : float
         Seconds to the end of the route (hazard-free drives; the time limit if it never
         arrived; NaN for hazard kinds).
@@ -203,6 +205,7 @@ class Run:
     hit: str = ""
     impact_speed: float = 0.0
     closing_speed: float = 0.0
+    final_gap: float = float("nan")
     trip_time: float = float("nan")
     frames: int = 0
     braking_frames: int = 0
@@ -252,11 +255,15 @@ class Perception:
         self.background = render_depth(camera, np.zeros((0, 7))).depth
         self.px_scale = camera.width / REFERENCE_WIDTH_PX
 
-    def frame(self, world: World, condition, seq: np.random.SeedSequence):
-        """(estimated depth, detections, hazard visible pixels, hazard camera distance)."""
+    def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]):
+        """(estimated depth, detections, hazard visible pixels, hazard camera distance).
+
+        ``seeds`` seed the depth errors and the detector errors; a generator is made afresh
+        from each, so the same seeds give the same errors every time.
+        """
         boxes, classes, hazard_row = world.frame_boxes()
         render = render_depth(self.camera, boxes)
-        depth_rng, detector_rng = (np.random.default_rng(s) for s in seq.spawn(2))
+        depth_rng, detector_rng = (np.random.default_rng(s) for s in seeds)
         depth = estimate_depth(render.depth, render.labels, self.background, condition.depth, depth_rng,
                                self.px_scale)
         dets = detect(self.camera, boxes, classes, render.visibility, render.visible_px, condition.detector,
@@ -279,7 +286,7 @@ class _Member:
 
 
 def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonitor | None,
-                 shields=(), driver: Driver = Driver()) -> list[Run]:
+                 shields=(), driver: Driver = Driver(), condition: Condition | None = None) -> list[Run]:
     """Drive one scenario with the baseline and with each shield setting.
 
     Parameters
@@ -290,6 +297,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
         Needed when ``shields`` is not empty; its camera must be the perception's.
     shields : sequence of ShieldConfig
     driver : Driver
+    condition : Condition, optional
+        Degradations to use instead of those named by ``spec.condition`` (a variant).
 
     Returns
     -------
@@ -302,7 +311,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     if monitor is not None and monitor.camera is not perception.camera and \
             (monitor.camera.width, monitor.camera.height) != (perception.camera.width, perception.camera.height):
         raise ValueError("the monitor's camera and the perception's differ in image size")
-    condition = get_condition(spec.condition)
+    condition = get_condition(spec.condition) if condition is None else get_condition(condition)
     max_range = monitor.config.max_range if monitor is not None else DEFAULT_RANGE_M
     shield_decel = (monitor.config.shield if monitor is not None else ShieldConfig()).deceleration
     world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
@@ -311,7 +320,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                            world.speed), Shield.from_config(c) if c is not None else None, driver.delay_steps)
                for c in configs]
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
-    streams = np.random.SeedSequence([int(spec.seed), 1]).spawn(n_steps)
+    # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
+    streams = [seq.spawn(2) for seq in np.random.SeedSequence([int(spec.seed), 1]).spawn(n_steps)]
     branches = [(world, members)]
     onset = None
     for step in range(n_steps):
@@ -387,6 +397,7 @@ def _advance(world: World, command: float, group: list[_Member], driver: Driver)
             run = m.run
             run.outcome = "collision" if ahead else "rear-ended"
             run.hit, run.impact_speed, run.closing_speed = actor.actor_class, float(speed), float(abs(closing))
+            run.final_gap = 0.0 if world.hazard is not None and actor is world.hazard.actor else world.hazard_gap()
             if world.hazard is None:
                 run.trip_time = world.max_time
         return False
@@ -412,6 +423,6 @@ def _advance(world: World, command: float, group: list[_Member], driver: Driver)
 
 
 def _finish(run: Run, world: World, outcome: str) -> None:
-    run.outcome = outcome
+    run.outcome, run.final_gap = outcome, world.hazard_gap()
     if world.hazard is None and outcome == "timeout":
         run.trip_time = world.max_time
