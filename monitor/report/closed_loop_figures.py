@@ -73,6 +73,8 @@ def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
     fig, ax = plt.subplots(figsize=(6.5, 5))
     for point in points:
         x, y = point["false_brake_rate"], point["avoidance_rate"]
+        if not (np.isfinite(x) and np.isfinite(y)):  # no drives or no collisions to measure on
+            continue
         if point["driver"] == default:
             ax.plot(x, y, "r*", ms=16, zorder=3, label=f"default {default}")
         ax.plot(x, y, "o", color="tab:blue", ms=5)
