@@ -2,8 +2,9 @@
 
 Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
 
-1. the actors become ego-frame boxes; :func:`~monitor.synthetic.render_depth` ray-casts the
-   front camera's true depth, :func:`~monitor.synthetic.degrade.estimate_depth` and
+1. the actors become ego-frame boxes; :func:`~monitor.synthetic.render_depth` ray-casts
+   them and the street's structure, the front camera's true depth;
+   :func:`~monitor.synthetic.degrade.estimate_depth` and
    :func:`~monitor.synthetic.degrade.detect` degrade it and the detections under the
    scenario's condition;
 2. the **baseline** driver brakes at ``brake`` m/s^2 when a detection (score >= ``min_score``)
@@ -252,7 +253,6 @@ class Perception:
         if not isinstance(camera, Camera):
             raise ValueError(f"camera is a {type(camera).__name__}, expected a monitor.geometry.camera.Camera")
         self.camera = camera
-        self.background = render_depth(camera, np.zeros((0, 7))).depth
         self.px_scale = camera.width / REFERENCE_WIDTH_PX
 
     def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]):
@@ -262,9 +262,9 @@ class Perception:
         from each, so the same seeds give the same errors every time.
         """
         boxes, classes, hazard_row = world.frame_boxes()
-        render = render_depth(self.camera, boxes)
+        render = render_depth(self.camera, boxes, *world.frame_structure())
         depth_rng, detector_rng = (np.random.default_rng(s) for s in seeds)
-        depth = estimate_depth(render.depth, render.labels, self.background, condition.depth, depth_rng,
+        depth = estimate_depth(render.depth, render.labels, render.background, condition.depth, depth_rng,
                                self.px_scale)
         dets = detect(self.camera, boxes, classes, render.visibility, render.visible_px, condition.detector,
                       detector_rng)
@@ -317,7 +317,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
     configs = [None] + shields
     members = [_Member(Run(spec.kind, spec.condition, int(spec.seed), driver_label(c), world.regime,
-                           world.speed), Shield.from_config(c) if c is not None else None, driver.delay_steps)
+                           world.speed), Shield(c) if c is not None else None, driver.delay_steps)
                for c in configs]
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
     # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ

@@ -28,8 +28,11 @@ numbered from left to right), heading from +x towards +y. The ego drives in lane
 +x from x = 0. :meth:`World.frame_boxes` turns the actors into the ego frame of
 :mod:`monitor.synthetic` (x forward, y *left*, origin on the ground at the rear axle).
 
+The street's static structure (curbs, poles, trees, buildings, fences, hedges:
+:func:`monitor.synthetic.scene.make_structure`) is rendered too; it is nobody's obstacle.
+
 Randomness: a scenario is a pure function of ``(kind, seed)``: the traffic comes from one
-stream of the seed and the hazard from another, so the same seed gives the same road, speed
+stream of the seed, the hazard from another and the structure from a third, so the same seed gives the same road, speed
 and traffic in every kind and every condition.
 """
 from __future__ import annotations
@@ -41,7 +44,7 @@ import numpy as np
 
 from monitor.synthetic.scene import (
     ACTOR_CLASSES, BIKE_LANE_WIDTH_M, EGO_FRONT_M, EGO_HALF_WIDTH_M, EGO_REAR_M, LANE_WIDTH_M,
-    PARKING_WIDTH_M, SCENE_RADIUS_M,
+    PARKING_WIDTH_M, SCENE_RADIUS_M, Road as StreetSection, Structure, make_structure,
 )
 
 try:  # the optional extra "sim"
@@ -261,11 +264,19 @@ class World:
         Seconds since the start.
     """
 
-    def __init__(self, spec, road, ego, hazard, speed, regime, route, max_time, extras):
+    def __init__(self, spec, road, ego, hazard, speed, regime, route, max_time, extras, structure):
         self.spec, self.road, self.ego, self.hazard = spec, road, ego, hazard
         self.speed, self.regime, self.route, self.max_time = speed, regime, route, max_time
-        self.extras = extras
+        self.extras, self.structure = extras, structure
         self.time = 0.0
+
+    def frame_structure(self) -> tuple[np.ndarray, np.ndarray]:
+        """The street's structure within reach of the ego: ego-frame boxes (m, 7) and their
+        label codes (m,) int16 (its boxes are in monitor.synthetic's frame, y left, already)."""
+        boxes = self.structure.boxes.copy()
+        boxes[:, 0] -= self.ego.position[0] - EGO_CENTRE_M
+        keep = np.abs(boxes[:, 0]) - 0.5 * boxes[:, 4] <= SCENE_RADIUS_M
+        return boxes[keep], self.structure.labels[keep]
 
     @property
     def obstacles(self) -> list:
@@ -395,7 +406,7 @@ def build_world(spec: ScenarioSpec, *, reaction: float = 0.2, brake: float = 6.0
     World
     """
     require_highway_env()
-    traffic_seq, hazard_seq = np.random.SeedSequence(int(spec.seed)).spawn(2)
+    traffic_seq, hazard_seq, structure_seq = np.random.SeedSequence(int(spec.seed)).spawn(3)
     rng = np.random.default_rng(traffic_seq)
     regime = "parking" if rng.random() < 0.5 else "urban"
     speed = float(rng.uniform(*SPEED_REGIMES[regime]))
@@ -507,7 +518,11 @@ def build_world(spec: ScenarioSpec, *, reaction: float = 0.2, brake: float = 6.0
         for offset, direction in ((0.9, 1.0), (2.1, -1.0)):
             _walkers(extras, rng, kerb + outward * offset, "pedestrian", direction * rng.uniform(1.0, 1.6),
                      (1.5 / density, 20.0 / density), span, max_time)
-    return World(spec, road, ego, hazard, speed, regime, route, max_time, extras)
+    # monitor.synthetic's street: same lanes at y = 0, -3.5 (its y is left, highway-env's right)
+    street = StreetSection(same_lanes=same_lanes, oncoming_lanes=oncoming_lanes, parking=parking)
+    structure: Structure = make_structure(np.random.default_rng(structure_seq), street,
+                                          (-BEHIND_M, speed * max_time + SCENE_RADIUS_M))
+    return World(spec, road, ego, hazard, speed, regime, route, max_time, extras, structure)
 
 
 def _stream(road, rng, y, heading, speed, gaps, span, skip) -> None:
