@@ -27,7 +27,6 @@ return is the route covered per second (progress rate). Then, over the runs of a
 """
 from __future__ import annotations
 
-import math
 from collections import defaultdict
 
 import numpy as np
@@ -167,6 +166,3 @@ def trade_off(runs: list[Run]) -> list[dict]:
                        "added_trip_time": drives["added_trip_time"]})
     return points
 
-
-def is_nan(value) -> bool:
-    return isinstance(value, float) and math.isnan(value)
