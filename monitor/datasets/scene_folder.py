@@ -248,10 +248,8 @@ class SceneReader:
             raise FileNotFoundError(
                 f"{self._path}: {record.where}.{name}: file {path} does not exist")
         array = read_npy(path, f"{name} map")
-        if array.dtype != MAPS[name] or array.shape != (self.camera.height, self.camera.width):
-            raise ValueError(f"{path}: holds {array.dtype} {array.shape}, expected a "
-                             f"{np.dtype(MAPS[name])} {name} map of the camera's size "
-                             f"({self.camera.height}, {self.camera.width})")
+        if array.dtype != MAPS[name]:
+            raise ValueError(f"{path}: holds {array.dtype}, expected a {np.dtype(MAPS[name])} {name} map")
         return array
 
 
