@@ -182,6 +182,10 @@ class SceneReader:
                 data = json.load(f)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc})") from exc
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+        except RecursionError:
+            raise ValueError(f"{path}: JSON nested too deeply to read") from None
         self._path = path
         top = JsonFields(data, "scene", path)
         if top.get("format") != FORMAT or top.get("version") != VERSION:
