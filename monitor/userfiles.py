@@ -236,3 +236,10 @@ def write_text(path: str | Path, text: str) -> None:
 def write_npy(path: str | Path, array: np.ndarray) -> None:
     """Write one array as ``.npy`` atomically (:func:`write_atomic`); no pickling."""
     write_atomic(path, lambda handle: np.save(handle, array, allow_pickle=False))
+
+
+def save_figure(fig, path: str | Path, dpi: int) -> None:
+    """Save a Matplotlib figure atomically (:func:`write_atomic`); the format follows the
+    suffix of ``path``."""
+    path = Path(path)
+    write_atomic(path, lambda handle: fig.savefig(handle, format=path.suffix.lstrip(".").lower() or "png", dpi=dpi))

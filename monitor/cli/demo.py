@@ -26,6 +26,7 @@ from monitor.config import load_config
 from monitor.offline.evaluation import observe, recall_table, rmse_table
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
+from monitor.userfiles import check_output_folder, write_text
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
@@ -37,6 +38,7 @@ HELP = "run the monitor on built-in synthetic scenes and write reports and figur
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-demo", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the output folder's earlier files")
     parser.add_argument("--rules", default=None, help="rule base (default: the shipped rules/fuzzrisk.yaml)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     parser.add_argument("--scenes", type=int, default=2, help="scenes per condition (default %(default)s)")
@@ -75,8 +77,9 @@ _COLUMNS = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("ok",
 
 def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    frame_figures = [f"frame_{c.replace(' ', '_')}.png" for c in args.conditions]
+    out = check_output_folder(args.out, ["frames.jsonl", "fis.png", "risk_timeline.png", "retrieval_stages.png",
+                                         "report.md", *frame_figures], args.overwrite)
     rules_path = Path(args.rules) if args.rules else shipped_rules()
     fis = fuzzcore.load(rules_path)
     config = load_config(args.config)
@@ -110,9 +113,7 @@ def run(args: argparse.Namespace) -> int:
         series.append({"name": scene.name, "time": times, "risk": risks, "target": targets, "status": statuses})
     bar.close()
 
-    with open(out / "frames.jsonl", "w", encoding="utf-8") as f:
-        for row in rows:
-            f.write(json.dumps(row) + "\n")
+    write_text(out / "frames.jsonl", "".join(json.dumps(row) + "\n" for row in rows))
     figures = {"fis.png": save_fis_figure(fis, out / "fis.png"),
                "risk_timeline.png": save_risk_timeline(series, out / "risk_timeline.png",
                                                         config.shield.threshold)}
@@ -130,8 +131,7 @@ def run(args: argparse.Namespace) -> int:
     print(SYNTHETIC_NOTE)
     print(f"rule base: {rules_path} ({fis.name}); shield threshold {config.shield.threshold}")
     print(format_table(table, _COLUMNS))
-    (out / "report.md").write_text(_report(table, rules_path, fis, bench, config, figures, elapsed),
-                                   encoding="utf-8")
+    write_text(out / "report.md", _report(table, rules_path, fis, bench, config, figures, elapsed))
     print(f"{len(rows)} frames in {elapsed:.1f} s; reports and figures in {out}/")
     return 0
 

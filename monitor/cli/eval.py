@@ -25,8 +25,12 @@ from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, det
 from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
+from monitor.userfiles import check_output_folder, write_text
 
 HELP = "the paper's validation tables and each rule base's RMSE, on synthetic or recorded scenes"
+
+#: the files the command writes in its output folder (checked before the work starts)
+OUTPUTS = ("report.md", "tables.json")
 
 CORRELATION = [("alpha", "alpha", "{}"), ("beta", "beta", "{}"), ("frames", "frames", "{}"),
                ("iou_r", "r IoU~", "{:.2f}"), ("rdd_r", "r RDD~", "{:.2f}")]
@@ -40,6 +44,7 @@ RMSE = [("rules", "rule base", "{}"), ("frames", "test frames", "{}"), ("rmse", 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-eval", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the output folder's earlier files")
     parser.add_argument("--rules-dir", default=None, help="rule bases to compare (default: the shipped rules/)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     add_scene_arguments(parser, default_scenes=6, default_test=2)
@@ -53,6 +58,7 @@ def _by_condition(observations):
 
 
 def run(args: argparse.Namespace) -> int:
+    out = check_output_folder(args.out, OUTPUTS, args.overwrite)
     bar = tqdm(total=count_frames(args, None), unit="frame", desc="eval", disable=None)
     selection = select_scenes(args, None, progress=bar.update)
     config = load_config(args.config)
@@ -87,14 +93,12 @@ def run(args: argparse.Namespace) -> int:
          tables["analysis"], ANALYSIS),
         (f"Rule bases against 1 - USC~ on the {len(test_names)} held-out test scenes", tables["rmse"], RMSE),
     ]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     print(selection.note)
     lines = ["# fuzzrisk evaluation", "", f"> {selection.note}", ""]
     for title, rows, columns in sections:
         print(f"\n{title}\n{format_table(rows, columns)}")
         lines += [f"## {title}", "", format_table(rows, columns, markdown=True), ""]
-    (out / "report.md").write_text("\n".join(lines), encoding="utf-8")
-    (out / "tables.json").write_text(json.dumps({"note": selection.note, **tables}, indent=1), encoding="utf-8")
+    write_text(out / "report.md", "\n".join(lines))
+    write_text(out / "tables.json", json.dumps({"note": selection.note, **tables}, indent=1))
     print(f"\nreport: {out / 'report.md'}")
     return 0

@@ -26,12 +26,17 @@ from monitor.shipped import shipped_rules  # noqa: E402
 from monitor.offline.simulation import Scenario, run_experiment, summarise  # noqa: E402
 from monitor.synthetic import CONDITIONS  # noqa: E402
 from monitor.synthetic.scene import ACTOR_CLASSES  # noqa: E402
+from monitor.userfiles import check_output_folder, save_figure, write_text  # noqa: E402
+
+#: the files the command writes in its output folder
+OUTPUTS = ("trials.jsonl", "simulation.png")
 
 HELP = "closed-loop safeguarding: collisions with and without the monitor's shield"
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-simulation", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the output folder's earlier files")
     parser.add_argument("--rules", default=None, help="rule base (default: the shipped rules/fuzzrisk.yaml)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     parser.add_argument("--trials", type=int, default=10, help="seeds, each driven with and without the shield")
@@ -49,6 +54,7 @@ def run(args: argparse.Namespace) -> int:
     if args.trials < 1:
         raise ValueError(f"--trials {args.trials}: must be >= 1")
     scenario = Scenario(obstacle_class=args.obstacle, distance=args.distance, speed=args.speed)
+    out = check_output_folder(args.out, OUTPUTS, args.overwrite)
     bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=args.seed)
     config = load_config(args.config)
     monitor = RiskMonitor(fuzzcore.load(args.rules or shipped_rules()), bench.prior(), bench.camera, config,
@@ -57,12 +63,8 @@ def run(args: argparse.Namespace) -> int:
     pairs = run_experiment(scenario, args.condition, range(args.seed, args.seed + args.trials), bench.camera,
                            monitor, progress=bar.update)
     bar.close()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    with open(out / "trials.jsonl", "w", encoding="utf-8") as f:
-        for base, shielded in pairs:
-            for trial in (base, shielded):
-                f.write(json.dumps(asdict(trial)) + "\n")
+    write_text(out / "trials.jsonl",
+               "".join(json.dumps(asdict(trial)) + "\n" for pair in pairs for trial in pair))
     _figure(pairs, config.shield.threshold, out / "simulation.png")
     s = summarise(pairs)
     print(SYNTHETIC_NOTE)
@@ -89,5 +91,5 @@ def _figure(pairs, threshold: float, path: Path) -> None:
     ax_risk.axhline(threshold, color="red", lw=0.8, ls=":")
     ax_risk.set(xlabel="time (s)", ylabel="risk", ylim=(-0.02, 1.02), title="monitor risk (shielded runs)")
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, 80)
     plt.close(fig)

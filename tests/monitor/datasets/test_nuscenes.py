@@ -296,6 +296,20 @@ def _results(edit_results):
      r"results\[s0\]\[0\]\.sample_token: 's1', expected 's0'"),
     (_results(lambda r: r["results"].update(s0={})), ValueError, r"results\[s0\] is a dict"),
     (_results(lambda r: r.pop("meta")), ValueError, "field 'meta' is missing"),
+    # issue 13, item 17: NaN (json reads the NaN literal) and huge numbers name the file and token
+    (_set("sample_annotation", 0, "rotation", [math.nan, 0.0, 0.0, 1.0]), ValueError,
+     r"sample_annotation.json: sample_annotation\[token=a0\]\.rotation: \[nan, 0.0, 0.0, 1.0\] is not a list "
+     r"of 4 finite numbers"),
+    (_set("sample_annotation", 0, "size", [math.nan, 4.0, 1.5]), ValueError,
+     r"sample_annotation\[token=a0\]\.size: \[nan, 4.0, 1.5\] is not a list of 3 finite numbers"),
+    (_set("ego_pose", 0, "translation", [10**400, 0, 0]), ValueError,
+     r"ego_pose\[token=ep0\]\.translation: .* is not a list of 3 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(rotation=[math.nan] * 4)), ValueError,
+     r"results\[s0\]\[0\]\.rotation: \[nan, nan, nan, nan\] is not a list of 4 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(size=[1.0, math.inf, 1.0])), ValueError,
+     r"results\[s0\]\[0\]\.size: \[1.0, inf, 1.0\] is not a list of 3 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(detection_score=math.nan)), ValueError,
+     r"results\[s0\]\[0\]\.detection_score: nan is not a finite number"),
 ])
 def test_malformed_input_is_a_clear_error(tmp_path, edit, error, message):
     tabs, res = tables(), results()
