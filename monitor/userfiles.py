@@ -25,6 +25,7 @@ from __future__ import annotations
 import os
 import secrets
 import struct
+import tokenize
 from pathlib import Path
 from typing import BinaryIO, Callable, Iterable
 
@@ -81,8 +82,9 @@ def read_npy(path: str | Path, what: str = "array file", max_elements: int = MAX
                 shape, fortran, dtype = np.lib.format.read_array_header_2_0(handle)
             else:
                 raise ValueError(f"format version {version[0]}.{version[1]}, expected 1.0 or 2.0")
-        except (ValueError, EOFError, SyntaxError) as exc:
-            raise ValueError(f"{what} {path}: not a readable .npy header ({exc})") from None
+        except (ValueError, EOFError, SyntaxError, TypeError, RecursionError, tokenize.TokenError) as exc:
+            # numpy parses the header's text with ast.literal_eval (and tokenize)
+            raise ValueError(f"{what} {path}: not a readable .npy header ({type(exc).__name__}: {exc})") from None
         if dtype.hasobject:
             raise ValueError(f"{what} {path}: dtype {dtype} holds Python objects (pickled data), "
                              "expected numbers")
