@@ -20,6 +20,8 @@ COMMANDS = {
     "convert": "monitor.cli.convert",
     "tune": "monitor.cli.tune",
     "bench": "monitor.cli.bench",
+    "check": "monitor.cli.check",
+    "plot": "monitor.cli.plot",
 }
 
 
