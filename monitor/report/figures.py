@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 from fuzzcore import FuzzySystem  # noqa: E402
 from fuzzcore._kernels import mf_array  # noqa: E402
 from fuzzcore.membership import resolve_kind  # noqa: E402
+from monitor.userfiles import save_figure  # noqa: E402
 
 DETECTOR_COLOUR = "#1f77ff"
 DEPTH_COLOUR = "#ffd400"
@@ -70,7 +71,7 @@ def save_fis_figure(fis: FuzzySystem, path: str | Path, resolution: int = 61) ->
     fig.suptitle(f"rule base {fis.name}: {len(fis.rules)} rules, {fis.defuzzifier}")
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, 90)
     plt.close(fig)
     return path
 
@@ -97,7 +98,7 @@ def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = 
         ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, 80)
     plt.close(fig)
     return path
 
@@ -128,6 +129,6 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, 80)
     plt.close(fig)
     return path
