@@ -21,6 +21,8 @@ COMMANDS = {
     "tune": "monitor.cli.tune",
     "bench": "monitor.cli.bench",
     "monitor": "monitor.cli.monitor",
+    "check": "monitor.cli.check",
+    "plot": "monitor.cli.plot",
 }
 
 

@@ -176,11 +176,12 @@ def select_scenes(args: argparse.Namespace, split: str | None, progress=None) ->
 
 
 def _select_nuscenes(args: argparse.Namespace) -> Selection:
-    if (args.depth_dir is None) == (args.depth_model is None):
-        raise ValueError("--nuscenes needs depth: --depth-dir DIR (maps on disk) or --depth-model MODEL.onnx "
-                         "(from the camera images), one of them")
+    if args.depth_dir is not None and args.depth_model is not None:
+        raise ValueError("--depth-dir and --depth-model are alternatives for --nuscenes: depth maps on disk, or "
+                         "depth from the camera images; give one")
     missing = [flag for flag, value in (("--prior PRIOR.npy", args.prior), ("--detections RESULTS.json",
-               args.detections)) if value is None]
+               args.detections), ("--depth-dir DIR (or --depth-model MODEL.onnx)",
+                                  args.depth_dir or args.depth_model)) if value is None]
     if missing:
         raise ValueError(f"--nuscenes needs {', '.join(missing)}")
     reader = NuScenesReader(args.nuscenes, args.version, detections=args.detections, depth=args.depth_dir,

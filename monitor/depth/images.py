@@ -7,7 +7,6 @@ saved as ``.npy`` for reuse (``--depth-dir`` of a later run).
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import cv2
 import numpy as np
 
 from monitor.depth.onnx_model import OnnxDepthEstimator
+from monitor.userfiles import write_npy
 
 
 def read_image(path: str | Path) -> np.ndarray:
@@ -35,14 +35,6 @@ def read_image(path: str | Path) -> np.ndarray:
         raise ValueError(f"image {path}: OpenCV cannot decode it; expected a JPEG, PNG or other image "
                          "file OpenCV reads")
     return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
-
-
-def save_depth_npy(path: Path, depth: np.ndarray) -> None:
-    """Write a depth map as float32 ``.npy``, whole or not at all (temp file and rename)."""
-    tmp = path.with_name(f".{path.name}.tmp")
-    with open(tmp, "wb") as f:
-        np.save(f, np.asarray(depth, dtype=np.float32), allow_pickle=False)
-    os.replace(tmp, path)
 
 
 @dataclass(frozen=True)
@@ -130,6 +122,6 @@ class ImageDepth:
                     continue
                 depth = next(depths)
                 if self.save_dir is not None:
-                    save_depth_npy(Path(self.save_dir) / f"{key}.npy", depth)
+                    write_npy(Path(self.save_dir) / f"{key}.npy", depth)
                 out.append(depth)
         return out

@@ -30,6 +30,7 @@ import numpy as np
 
 from monitor.depth.files import load_depth
 from monitor.offline.parallel import ordered_map
+from monitor.userfiles import read_npy, write_npy
 
 
 class InverseDepthPrior:
@@ -137,8 +138,27 @@ class PriorPart:
 
     def build(self):
         def accumulate(paths: list) -> InverseDepthPrior:
-            return build_prior((str(path), load_depth(path, png_scale=self.png_scale)) for path in paths)
+            return build_prior((str(path), training_depth(path, self.png_scale)) for path in paths)
         return accumulate
+
+
+#: A training map whose median valid value is below this many metres is refused: as metres
+#: the whole view would be within reach of the camera, so it is an inverse depth in 1/m.
+MIN_MEDIAN_DEPTH_M = 1.0
+
+
+def training_depth(path: Path, png_scale: float) -> np.ndarray:
+    """The depth map in ``path``, refused (ValueError naming the file) when its median valid
+    value is below :data:`MIN_MEDIAN_DEPTH_M`: not metres but 1/m (a prior?)."""
+    depth = load_depth(path, png_scale=png_scale)
+    valid = depth[np.isfinite(depth) & (depth > 0)]
+    if valid.size and np.median(valid) < MIN_MEDIAN_DEPTH_M:
+        raise ValueError(
+            f"{path}: median valid value {float(np.median(valid)):.3g} is below "
+            f"{MIN_MEDIAN_DEPTH_M:g} m: not a depth map in metres but an inverse depth in 1/m "
+            "(a prior from an earlier run?); move it out of the depth folder"
+        )
+    return depth
 
 
 def prior_of_files(paths: list, png_scale: float, *, workers: int = 1, ray: str | None = None,
@@ -160,33 +180,35 @@ def prior_of_files(paths: list, png_scale: float, *, workers: int = 1, ray: str 
 
 
 def save_prior(path: str | Path, prior: np.ndarray) -> None:
-    """Write a prior (float32 (H, W), 1/m, NaN = no sample) as ``.npy``."""
+    """Write a prior (float32 (H, W), 1/m, NaN = no sample) as ``.npy``, whole or not at
+    all (:func:`monitor.userfiles.write_atomic`)."""
     path = Path(path)
     if path.suffix.lower() != ".npy":
         raise ValueError(f"prior path {path} must end in .npy")
-    np.save(path, check_prior(prior, name=str(path)))
+    write_npy(path, check_prior(prior, name=str(path)))
 
 
 def load_prior(path: str | Path) -> np.ndarray:
-    """Read a prior written by :func:`save_prior` (or ``fuzzrisk prior build``)."""
+    """Read a prior written by :func:`save_prior` (or ``fuzzrisk prior build``).
+
+    The header is checked against the file before anything is allocated
+    (:func:`monitor.userfiles.read_npy`); errors name the file.
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(
             f"prior file {path} does not exist; build one with "
             "`fuzzrisk prior build DEPTH_DIR -o PRIOR.npy`"
         )
-    try:
-        prior = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        raise ValueError(f"prior file {path}: not a readable .npy array ({exc})") from exc
-    return check_prior(prior, name=str(path))
+    return check_prior(read_npy(path, "prior file"), name=f"prior file {path}")
 
 
 def check_prior(prior: np.ndarray, *, name: str = "prior") -> np.ndarray:
     """Validate a prior and return it as float32 (H, W).
 
     A prior holds mean inverse depths: finite values >= 0 in 1/m, or NaN where no training
-    sample was valid. Anything else (inf, negatives, a wrong shape or dtype) is an error.
+    sample was valid. Anything else (inf, negatives, values too large for float32 such as a
+    float64 1e300, a wrong shape or dtype) is an error.
     """
     if not isinstance(prior, np.ndarray) or prior.ndim != 2 or not np.issubdtype(prior.dtype, np.floating):
         shape = getattr(prior, "shape", None)
@@ -195,11 +217,16 @@ def check_prior(prior: np.ndarray, *, name: str = "prior") -> np.ndarray:
             f"{name}: shape {shape}, dtype {dtype}; expected a floating-point (H, W) "
             "mean inverse depth in 1/m"
         )
-    bad = np.isinf(prior) | (prior < 0)
+    with np.errstate(over="ignore"):
+        single = np.ascontiguousarray(prior, dtype=np.float32)
+    bad = np.isinf(single) | (single < 0)
     if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        value = float(prior[first])
+        kind = "too large for float32 (> 3.4e38)" if np.isfinite(value) and value > 0 else "inf or negative"
         raise ValueError(
-            f"{name}: {int(bad.sum())} pixels are inf or negative (first at row, col "
-            f"{tuple(int(i) for i in np.argwhere(bad)[0])}); a prior holds mean inverse "
-            "depths >= 0, NaN where no sample"
+            f"{name}: {int(bad.sum())} pixels are inf, negative or too large for float32 (first "
+            f"at row, col {first}: {value!r}, {kind}); a prior holds mean inverse depths >= 0 in "
+            "1/m, NaN where no sample"
         )
-    return np.ascontiguousarray(prior, dtype=np.float32)
+    return single

@@ -21,6 +21,11 @@ NEGATIVE_SIZE = 2
 NEGATIVE_DEPTH = 3
 NONPOSITIVE_DEPTH = 4
 ZERO_AREA = 5
+TOO_LARGE = 6
+
+#: largest magnitude of a box entry (pixels or metres): beyond it centre distances and
+#: areas could overflow to inf
+MAX_MAGNITUDE = 1e15
 
 
 @njit(cache=True)
@@ -75,13 +80,16 @@ def depth_ratio_one(d_p, d_g):
 def invalid_entry(a, positive_depth, positive_area):
     """First offending ``(row, column, code)`` of an (n, 5) array, or ``(-1, -1, OK)``.
 
-    Checks: every entry finite; ``w, h >= 0``; ``d >= 0`` (``> 0`` if ``positive_depth``);
+    Checks: every entry finite and at most :data:`MAX_MAGNITUDE` in magnitude; ``w, h >= 0``;
+    ``d >= 0`` (``> 0`` if ``positive_depth``);
     ``x1 - x0 > 0`` and ``y1 - y0 > 0`` (the extents the measures use) if ``positive_area``.
     """
     for i in range(a.shape[0]):
         for j in range(5):
             if not np.isfinite(a[i, j]):
                 return i, j, NOT_FINITE
+            if abs(a[i, j]) > MAX_MAGNITUDE:
+                return i, j, TOO_LARGE
         for j in range(2, 4):
             if a[i, j] < 0.0:
                 return i, j, NEGATIVE_SIZE

@@ -36,8 +36,9 @@ from monitor.config import ShieldConfig
 from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
-from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK
+from monitor.risk_monitor import STATUSES
 from monitor.shield import Shield
+from monitor.userfiles import write_text
 
 RUN_FILE = "run.json"
 SUMMARY_FILE = "summary.md"
@@ -84,12 +85,6 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
 
 def _digest_json(data) -> str:
     return json.dumps(data, sort_keys=True)
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
 
 
 @dataclass
@@ -178,8 +173,8 @@ class RunOutput:
                                   "run); choose another output folder, or pass --overwrite")
         (self.out / SCENES_DIR).mkdir(parents=True, exist_ok=True)
         if not run_path.is_file():
-            _write_atomic(run_path, json.dumps(description, indent=1))
-        self.scenes = [self._open(plan, Shield.from_config(shield)) for plan in plans]
+            write_text(run_path, json.dumps(description, indent=1))
+        self.scenes = [self._open(plan, Shield(shield)) for plan in plans]
         self._by_name = {s.plan.name: s for s in self.scenes}
         self.resumed = sum(s.done for s in self.scenes)
 
@@ -274,8 +269,7 @@ class RunOutput:
             risk, target = np.array(s.risk, dtype=np.float64), np.array(s.target, dtype=np.float64)
             rows.append({
                 "scene": s.plan.name, "condition": s.plan.condition, "frames": s.done,
-                "ok": s.status.count(OK), "no_objects": s.status.count(NO_OBJECTS),
-                "invalid": s.status.count(INVALID_INPUT), "unprocessed": s.status.count(UNPROCESSED),
+                **{status: s.status.count(status) for status in STATUSES + (UNPROCESSED,)},
                 "mean_risk": float(np.nanmean(risk)) if np.isfinite(risk).any() else None,
                 "max_risk": float(np.nanmax(risk)) if np.isfinite(risk).any() else None,
                 "shield_on": float(np.mean(s.engaged)) if s.engaged else None,
@@ -292,7 +286,7 @@ class RunOutput:
         lines = ["# fuzzrisk monitor run", ""] + [f"> {n}" for n in notes] + ["", "## Scenes", "",
                                                                               format_table(self.table(), COLUMNS,
                                                                                            markdown=True), ""]
-        errors = [(s.plan.name, *e) for s in self.scenes for e in s.errors]
+        errors = self.errors()
         if errors:
             lines += [f"## Frames that could not be processed ({len(errors)})", ""]
             lines += [f"- {scene} frame {index} ({key}): {error}" for scene, index, key, error in errors] + [""]
@@ -302,7 +296,7 @@ class RunOutput:
             if png.is_file():
                 lines += [f"![{s.plan.name}]({SCENES_DIR}/{png.name})", ""]
         path = self.out / SUMMARY_FILE
-        _write_atomic(path, "\n".join(lines))
+        write_text(path, "\n".join(lines))
         return path
 
     def errors(self) -> list[tuple[str, int, str, str]]:
@@ -312,7 +306,6 @@ class RunOutput:
 
 #: the summary table's columns
 COLUMNS = [("scene", "scene", "{}"), ("condition", "condition", "{}"), ("frames", "frames", "{}"),
-           ("ok", "ok", "{}"), ("no_objects", "no-obj", "{}"), ("invalid", "invalid", "{}"),
-           ("unprocessed", "unprocessed", "{}"), ("mean_risk", "mean risk", "{:.2f}"),
+           *[(status, status, "{}") for status in STATUSES + (UNPROCESSED,)], ("mean_risk", "mean risk", "{:.2f}"),
            ("max_risk", "max risk", "{:.2f}"), ("shield_on", "shield", "{:.0%}"),
            ("mean_target", "1-USC~", "{:.2f}")]

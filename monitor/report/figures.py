@@ -11,7 +11,6 @@ The retrieval stages (paper, Fig. 2) are drawn by :mod:`monitor.report.retrieval
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Sequence
 
@@ -25,6 +24,7 @@ from matplotlib.figure import Figure  # noqa: E402
 from fuzzcore import FuzzySystem  # noqa: E402
 from fuzzcore._kernels import mf_array  # noqa: E402
 from fuzzcore.membership import resolve_kind  # noqa: E402
+from monitor.userfiles import save_figure  # noqa: E402
 
 DETECTOR_COLOUR = "#1f77ff"
 DEPTH_COLOUR = "#ffd400"
@@ -72,7 +72,7 @@ def save_fis_figure(fis: FuzzySystem, path: str | Path, resolution: int = 61) ->
     fig.suptitle(f"rule base {fis.name}: {len(fis.rules)} rules, {fis.defuzzifier}")
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, 90)
     plt.close(fig)
     return path
 
@@ -99,7 +99,7 @@ def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = 
         ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
+    save_figure(fig, path, 80)
     plt.close(fig)
     return path
 
@@ -110,8 +110,8 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     ``series``: dicts with ``name``, ``time`` (s), ``risk`` and ``target`` arrays (NaN
     where there is none: a frame not processed, no ground truth) and ``status`` (list of
     str; invalid frames are marked with an x). Drawn on a :class:`matplotlib.figure.Figure`
-    (no pyplot state, safe in worker processes) and written whole or not at all (a
-    temporary file beside ``path``, then a rename).
+    (no pyplot state, safe in worker processes) and written whole or not at all
+    (:func:`monitor.userfiles.save_figure`).
     """
     n = len(series)
     cols = min(3, n)
@@ -137,7 +137,5 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
-    fig.savefig(tmp, dpi=80, format="png")
-    os.replace(tmp, path)
+    save_figure(fig, path, 80)
     return path

@@ -44,7 +44,7 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
     assert [r["frame"] for r in rows] == list(range(N_FRAMES))
     config = load_config()
     mon = RiskMonitor(fuzzcore.load(shipped_rules()), load_prior(prior), frames[0].camera, config)
-    shield = Shield.from_config(config.shield)
+    shield = Shield(config.shield)
     for frame, row in zip(frames, rows):
         report = mon.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
         decision = shield.update(report.risk)
@@ -151,7 +151,7 @@ def test_unprocessable_frames_are_reported_and_strict_stops(recording, tmp_path,
     assert sorted(bad) == [4, 6] and all(bad[k]["risk"] is None and bad[k]["shield"] is None for k in bad)
     assert "000004.npy: depth_est is ((90, 160), dtype('float32')), expected a float32 array of shape " \
            "(900, 1600)" in bad[4]["error"]
-    assert "000006.npy: not a readable .npy array" in bad[6]["error"]
+    assert "000006.npy: not a .npy file" in bad[6]["error"]
     out = capsys.readouterr().out
     assert "2 frames could not be processed" in out
     assert "Frames that could not be processed (2)" in (tmp_path / "out" / "summary.md").read_text()
