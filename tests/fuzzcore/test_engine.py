@@ -4,8 +4,9 @@ import math
 import numpy as np
 from hypothesis import given, settings, strategies as st
 
-import reference
 from fuzzcore import FuzzySystem, Rule, Term, Variable
+
+import reference
 from strategies import PIECEWISE, mamdani_systems, samples, sugeno_systems
 
 
