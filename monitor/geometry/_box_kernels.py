@@ -12,7 +12,8 @@ of a box with itself is exactly 1.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 # codes returned by invalid_entry, turned into messages by monitor.geometry.boxes
 OK = 0
@@ -23,14 +24,14 @@ NONPOSITIVE_DEPTH = 4
 ZERO_AREA = 5
 
 
-@njit(cache=True)
+@kernel
 def _span(c, size):
     lo = c - 0.5 * size
     hi = c + 0.5 * size
     return lo, hi, hi - lo
 
 
-@njit(cache=True)
+@kernel
 def intersection_areas(a, b):
     """Intersection area and the two box areas (all from corner coordinates)."""
     ax0, ax1, aw = _span(a[0], a[2])
@@ -43,7 +44,7 @@ def intersection_areas(a, b):
     return inter, aw * ah, bw * bh
 
 
-@njit(cache=True)
+@kernel
 def iou_one(a, b):
     """IoU of two boxes; 0 when the union has no area (both boxes degenerate)."""
     inter, area_a, area_b = intersection_areas(a, b)
@@ -52,26 +53,26 @@ def iou_one(a, b):
     return inter / union if union > 0.0 else 0.0
 
 
-@njit(cache=True)
+@kernel
 def iog_one(p, g):
     """Intersection over the area of ``g``; the caller guarantees that area is > 0."""
     inter, _, area_g = intersection_areas(p, g)
     return inter / area_g
 
 
-@njit(cache=True)
+@kernel
 def rdd_one(d_p, d_s):
     """min(1, (d_p - d_s) / d_s); the caller guarantees d_s > 0 and d_p >= 0."""
     return min(1.0, (d_p - d_s) / d_s)
 
 
-@njit(cache=True)
+@kernel
 def depth_ratio_one(d_p, d_g):
     """min(1, d_g / d_p) written without the division when d_p <= d_g (so d_p = 0 gives 1)."""
     return 1.0 if d_p <= d_g else d_g / d_p
 
 
-@njit(cache=True)
+@kernel
 def invalid_entry(a, positive_depth, positive_area):
     """First offending ``(row, column, code)`` of an (n, 5) array, or ``(-1, -1, OK)``.
 
@@ -96,31 +97,31 @@ def invalid_entry(a, positive_depth, positive_area):
     return -1, -1, OK
 
 
-@njit(cache=True)
+@kernel
 def iou_rows(a, b, out):
     for i in range(a.shape[0]):
         out[i] = iou_one(a[i], b[i])
 
 
-@njit(cache=True)
+@kernel
 def iog_rows(p, g, out):
     for i in range(p.shape[0]):
         out[i] = iog_one(p[i], g[i])
 
 
-@njit(cache=True)
+@kernel
 def rdd_rows(d_p, d_s, out):
     for i in range(d_p.shape[0]):
         out[i] = rdd_one(d_p[i], d_s[i])
 
 
-@njit(cache=True)
+@kernel
 def depth_ratio_rows(d_p, d_g, out):
     for i in range(d_p.shape[0]):
         out[i] = depth_ratio_one(d_p[i], d_g[i])
 
 
-@njit(cache=True)
+@kernel
 def centre_distances(a, b):
     """(n, m) Euclidean distances between the centres of the rows of ``a`` and ``b``."""
     bx = b[:, 0].copy()  # contiguous columns let the inner loop vectorise
@@ -136,7 +137,7 @@ def centre_distances(a, b):
     return out
 
 
-@njit(cache=True)
+@kernel
 def score_pairs(s, p, partner, alpha, beta, pair_iou, pair_rdd, matched):
     """Fill the per-S alignment table (M,) given each S's partner row in P (-1: none).
 

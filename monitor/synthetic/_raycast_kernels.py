@@ -9,12 +9,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-_FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+from fuzzcore.jit import SYNTHETIC_IMAGE, kernel
 
 
-@njit(cache=True, fastmath=_FASTMATH)
+@kernel(fastmath=SYNTHETIC_IMAGE)
 def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silhouette,
            depth32, visible):
     """Ray-cast the ground plane z = 0 and oriented boxes into a z-buffer.
@@ -97,7 +96,7 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
                 visible[labels[v, u] - 1] += 1
 
 
-@njit(cache=True, fastmath=_FASTMATH, inline="always")
+@kernel(inline=True, fastmath=SYNTHETIC_IMAGE)
 def _slab(r, o, half, t_in, t_out):
     """Narrow [t_in, t_out] to where o + t r lies in [-half, half] (empty: t_in > t_out)."""
     if r == 0.0:
