@@ -15,8 +15,6 @@ from pathlib import Path
 
 import fuzzcore
 
-HELP = "convert a rule base between YAML and MATLAB .fis (the format follows each extension)"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("input", metavar="IN", help="rule base to read (.yaml, .yml or .fis)")

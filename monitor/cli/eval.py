@@ -26,8 +26,6 @@ from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
 
-HELP = "the paper's validation tables and each rule base's RMSE, on synthetic or recorded scenes"
-
 CORRELATION = [("alpha", "alpha", "{}"), ("beta", "beta", "{}"), ("frames", "frames", "{}"),
                ("iou_r", "r IoU~", "{:.2f}"), ("rdd_r", "r RDD~", "{:.2f}")]
 RECALL = [("condition", "condition", "{}"), ("setting", "(alpha, beta)", "{}"), ("gts", "GTs", "{}"),

@@ -20,7 +20,6 @@ from monitor.offline.evaluation import feature_rows, observe_scenes
 from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import shipped_rules
 
-HELP = "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"
 FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
 
 

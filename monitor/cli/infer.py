@@ -9,8 +9,6 @@ import argparse
 
 import fuzzcore
 
-HELP = "evaluate a rule base (YAML or MATLAB .fis) for one set of inputs"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("rules", metavar="RULES", help="rule base file (.yaml, .yml or .fis)")

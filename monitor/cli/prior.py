@@ -15,8 +15,6 @@ from tqdm import tqdm
 from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
 from monitor.depth.prior import build_prior, save_prior
 
-HELP = "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)

@@ -12,22 +12,17 @@ import json
 from dataclasses import asdict
 from pathlib import Path
 
-import matplotlib
+from tqdm import tqdm
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from tqdm import tqdm  # noqa: E402
-
-import fuzzcore  # noqa: E402
-from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark  # noqa: E402
-from monitor.config import load_config  # noqa: E402
-from monitor.risk_monitor import RiskMonitor  # noqa: E402
-from monitor.shipped import shipped_rules  # noqa: E402
-from monitor.offline.simulation import Scenario, run_experiment, summarise  # noqa: E402
-from monitor.synthetic import CONDITIONS  # noqa: E402
-from monitor.synthetic.scene import ACTOR_CLASSES  # noqa: E402
-
-HELP = "closed-loop safeguarding: collisions with and without the monitor's shield"
+import fuzzcore
+from monitor.config import load_config
+from monitor.offline.simulation import Scenario, run_experiment, summarise
+from monitor.report.figures import save_simulation_figure
+from monitor.risk_monitor import RiskMonitor
+from monitor.shipped import shipped_rules
+from monitor.synthetic import CONDITIONS
+from monitor.synthetic.scene import ACTOR_CLASSES
+from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -63,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         for base, shielded in pairs:
             for trial in (base, shielded):
                 f.write(json.dumps(asdict(trial)) + "\n")
-    _figure(pairs, config.shield.threshold, out / "simulation.png")
+    save_simulation_figure(pairs, config.shield.threshold, out / "simulation.png")
     s = summarise(pairs)
     print(SYNTHETIC_NOTE)
     print(f"scenario: {args.obstacle} {scenario.distance:g} m ahead at {scenario.speed:g} m/s, "
@@ -74,20 +69,3 @@ def run(args: argparse.Namespace) -> int:
     print(f"trials and figure in {out}/")
     return 0
 
-
-def _figure(pairs, threshold: float, path: Path) -> None:
-    fig, (ax_gap, ax_risk) = plt.subplots(1, 2, figsize=(11, 3.8))
-    for base, shielded in pairs:
-        ax_gap.plot(base.time, base.gap, color="tab:blue", alpha=0.5, lw=1)
-        ax_gap.plot(shielded.time, shielded.gap, color="tab:green", alpha=0.7, lw=1)
-        ax_risk.plot(shielded.time, shielded.risk, color="tab:green", alpha=0.5, lw=1)
-    ax_gap.plot([], [], color="tab:blue", label="baseline")
-    ax_gap.plot([], [], color="tab:green", label="with monitor + shield")
-    ax_gap.axhline(0, color="red", lw=0.8)
-    ax_gap.set(xlabel="time (s)", ylabel="gap to obstacle (m)", title="gap per trial")
-    ax_gap.legend(fontsize=8)
-    ax_risk.axhline(threshold, color="red", lw=0.8, ls=":")
-    ax_risk.set(xlabel="time (s)", ylabel="risk", ylim=(-0.02, 1.02), title="monitor risk (shielded runs)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)

@@ -28,8 +28,6 @@ from tqdm import tqdm
 import fuzzcore
 from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
 
-HELP = "tune a rule base on a feature table: membership functions (patternsearch), rules (pso) or both (joint)"
-
 METHODS = ("patternsearch", "pso", "joint")
 
 
