@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from monitor.geometry import _box_kernels as _k
-from monitor.geometry.boxes import as_boxes
+from monitor import _alignment_kernels as _k
+from monitor.geometry.boxes import as_boxes, centre_distances
 
 #: :attr:`Alignment.status` of a frame with at least one safety-critical object.
 OK = "ok"
@@ -86,7 +86,7 @@ class Alignment:
 
 def _assign(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     partner = np.full(a.shape[0], -1, dtype=np.int64)
-    rows, cols = linear_sum_assignment(_k.centre_distances(a, b))
+    rows, cols = linear_sum_assignment(centre_distances(a, b))
     partner[rows] = cols
     return partner
 

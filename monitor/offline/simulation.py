@@ -107,7 +107,7 @@ def _obstacle_box(scenario: Scenario, ego_x: float) -> np.ndarray:
     return np.array([[centre_x, 0.0, 0.5 * h, w, l, h, 0.5 * np.pi]])
 
 
-def _planner_brakes(detections: np.ndarray, speed: float, scenario: Scenario) -> bool:
+def planner_brakes(detections: np.ndarray, speed: float, scenario: Scenario) -> bool:
     """The baseline: brake for a detection in the corridor within stopping distance + margin."""
     if detections.shape[0] == 0:
         return False
@@ -145,7 +145,7 @@ def run_trial(scenario: Scenario, condition: str | Condition, seed: int, camera:
         render = render_depth(camera, boxes)
         depth = estimate_depth(render.depth, render.labels, background, cond.depth, depth_rng, px_scale)
         dets = detect(camera, boxes, classes, render.visibility, render.visible_px, cond.detector, detector_rng)
-        decel = scenario.brake if _planner_brakes(dets.boxes3d, speed, scenario) else 0.0
+        decel = scenario.brake if planner_brakes(dets.boxes3d, speed, scenario) else 0.0
         risk, engaged = float("nan"), False
         if monitor is not None:
             risk = monitor.step(depth, dets.boxes3d, dets.scores).risk

@@ -8,7 +8,7 @@ import fuzzcore
 from monitor.synthetic.suite import Benchmark
 from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import shipped_rules
-from monitor.offline.simulation import Scenario, _planner_brakes, run_trial, summarise
+from monitor.offline.simulation import Scenario, planner_brakes, run_trial, summarise
 from monitor.synthetic import get_condition
 from monitor.synthetic.scene import EGO_FRONT_M
 
@@ -26,10 +26,10 @@ def monitor():
 def test_planner_brakes_for_a_detection_within_stopping_distance():
     scenario = Scenario(speed=5.0, brake=5.0, margin=1.0)  # stopping distance 2.5 m, reach 3.5 m
     across = lambda gap, y=0.0: np.array([[EGO_FRONT_M + gap + 0.4, y, 0.7, 0.8, 2.0, 1.4, np.pi / 2]])
-    assert _planner_brakes(across(3.0), 5.0, scenario)           # 3.0 m ahead, inside 3.5 m
-    assert not _planner_brakes(across(4.0), 5.0, scenario)       # beyond the reach
-    assert not _planner_brakes(across(3.0, y=4.0), 5.0, scenario)  # beside the path
-    assert not _planner_brakes(np.zeros((0, 7)), 5.0, scenario)
+    assert planner_brakes(across(3.0), 5.0, scenario)           # 3.0 m ahead, inside 3.5 m
+    assert not planner_brakes(across(4.0), 5.0, scenario)       # beyond the reach
+    assert not planner_brakes(across(3.0, y=4.0), 5.0, scenario)  # beside the path
+    assert not planner_brakes(np.zeros((0, 7)), 5.0, scenario)
 
 
 def test_unseen_obstacle_baseline_collides_at_full_speed(monitor):
