@@ -18,8 +18,8 @@ import sys
 COMMANDS = {
     "infer": ("monitor.cli.infer", "evaluate a rule base (YAML or MATLAB .fis) for one set of inputs"),
     "demo": ("monitor.cli.demo", "run the monitor on built-in synthetic scenes and write reports and figures"),
-    "eval": ("monitor.cli.eval",
-             "the paper's validation tables and each rule base's RMSE, on synthetic or recorded scenes"),
+    "eval": ("monitor.cli.eval", "the monitor's quality measures and the paper's validation tables, "
+                                 "on synthetic or recorded scenes"),
     "features": ("monitor.cli.features",
                  "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"),
     "simulate": ("monitor.cli.simulate",
@@ -30,6 +30,12 @@ COMMANDS = {
                 "convert a rule base between YAML and MATLAB .fis (the format follows each extension)"),
     "tune": ("monitor.cli.tune", "tune a rule base on a feature table: membership functions "
                                  "(patternsearch), rules (pso) or both (joint)"),
+    "bench": ("monitor.cli.bench",
+              "measure the latency of a rule base (or of the monitor) against a real-time budget"),
+    "check": ("monitor.cli.check", "verify a rule base: coverage of the input box, monotonicity, "
+                                   "output range, rules and terms"),
+    "plot": ("monitor.cli.plot", "draw a rule base's terms and output surface, with uncovered and "
+                                 "non-monotone regions marked"),
 }
 
 

@@ -13,12 +13,22 @@ The tuned system is written as YAML, named after the output file, with
 ``metadata.tuning`` saying how it was made (method, settings, seed, the starting rule
 base, data file and its SHA-256, rows skipped, scores, this command).
 With ``--test`` the metric on a held-out table is reported and recorded as well.
+
+Paths in the metadata (the data files, and those in the recorded command) are written so
+that they mean the same on another machine: relative to the folder the command runs in
+(the project) when the file is inside it, as given when given relative, and otherwise by
+file name only; the SHA-256 identifies the data whatever its path.
+
+The output is checked before any work (a known extension, an existing folder, not one of
+the files read, not an existing file unless ``--overwrite``), and written whole or not at
+all (:func:`fuzzcore.io.write_text_atomic`).
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import hashlib
+import os
 import time
 from pathlib import Path
 
@@ -26,6 +36,7 @@ import numpy as np
 from tqdm import tqdm
 
 import fuzzcore
+from fuzzcore.io import check_save_path
 from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
 
 METHODS = ("patternsearch", "pso", "joint")
@@ -37,6 +48,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--method", required=True, choices=METHODS, help="what to tune")
     parser.add_argument("--rules", required=True, metavar="RULES.yaml", help="starting rule base")
     parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="where to write the tuned system")
+    parser.add_argument("--overwrite", action="store_true", help="replace OUT.yaml if it exists")
     parser.add_argument("--test", metavar="TEST.csv", help="held-out feature table to report the metric on")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
     parser.add_argument("--metric", choices=("rmse", "mae"), default="rmse", help="objective (default %(default)s)")
@@ -50,18 +62,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                     help="variables whose terms are tuned (default: all inputs and outputs)")
     ps.add_argument("--free-order", action="store_true",
                     help="let terms pass each other (default: each variable's terms keep their order)")
+    ps.add_argument("--free-partition", action="store_true",
+                    help="let terms leave a readable partition: gaps, heavy overlap, any width (default: each "
+                         "variable's terms stay ordered, cover its range, overlap and width bounded)")
     pso = parser.add_argument_group("particle swarm (pso, joint)")
     pso.add_argument("--swarm-size", type=int, default=100, help="particles (default %(default)s)")
     pso.add_argument("--swarm-iter", type=int, default=20, help="iterations (default %(default)s)")
     pso.add_argument("--allow-off", action="store_true", help="rules may be switched off")
 
 
+def recorded_path(path: str) -> str:
+    """``path`` as the metadata records it (module docstring): relative to the working
+    directory when inside it, as given when relative, else the file name; ``/`` separators."""
+    given = Path(path)
+    resolved, here = given.resolve(), Path.cwd().resolve()
+    if resolved == here or here in resolved.parents:
+        return resolved.relative_to(here).as_posix()
+    return given.as_posix() if not given.is_absolute() else given.name
+
+
 def _command(args: argparse.Namespace) -> str:
-    """The command line, normalised (every option that applies, at its value)."""
-    parts = ["fuzzrisk tune", f"--features {args.features}", f"--method {args.method}", f"--rules {args.rules}",
-             f"-o {args.output}"]
+    """The command line, normalised (every option that applies, at its value; paths as recorded)."""
+    parts = ["fuzzrisk tune", f"--features {recorded_path(args.features)}", f"--method {args.method}",
+             f"--rules {recorded_path(args.rules)}", f"-o {recorded_path(args.output)}"]
     if args.test:
-        parts.append(f"--test {args.test}")
+        parts.append(f"--test {recorded_path(args.test)}")
     parts += [f"--seed {args.seed}", f"--metric {args.metric}"]
     if args.method != "pso":
         parts += [f"--folds {args.folds}", f"--max-iter {args.max_iter}"]
@@ -69,6 +94,8 @@ def _command(args: argparse.Namespace) -> str:
             parts.append("--variables " + " ".join(args.variables))
         if args.free_order:
             parts.append("--free-order")
+        if args.free_partition:
+            parts.append("--free-partition")
     if args.method != "patternsearch":
         parts += [f"--swarm-size {args.swarm_size}", f"--swarm-iter {args.swarm_iter}"]
         if args.allow_off:
@@ -93,6 +120,8 @@ def _describe(table) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    read = [args.rules, args.features] + ([args.test] if args.test else [])
+    check_save_path(args.output, read, overwrite=args.overwrite, overwrite_hint="--overwrite")
     system = fuzzcore.load(args.rules)
     train = read_csv(args.features, system.input_names, args.target, args.group)
     test = read_csv(args.test, system.input_names, args.target, args.group) if args.test else None
@@ -114,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
         bar.set_postfix(shown, refresh=False)
 
     ps_options = {"n_folds": args.folds, "max_iter": args.max_iter, "variables": args.variables,
-                  "keep_order": not args.free_order}
+                  "keep_order": not args.free_order, "partition": not args.free_partition}
     pso_options = {"swarm_size": args.swarm_size, "max_iter": args.swarm_iter, "allow_off": args.allow_off}
     common = {"metric": args.metric, "seed": args.seed, "callback": progress}
     if args.method == "patternsearch":
@@ -132,11 +161,11 @@ def run(args: argparse.Namespace) -> int:
     result = tuner.result_
 
     tuning = dict(tuner.system_.metadata["tuning"])
-    tuning["data"] = {**tuning["data"], "file": args.features, "sha256": _sha256(args.features),
+    tuning["data"] = {**tuning["data"], "file": recorded_path(args.features), "sha256": _sha256(args.features),
                       "skipped_no_target": train.n_no_target, "skipped_no_features": train.n_no_features}
     if test is not None:
         initial_test, final_test = _score(system, test, args.metric), _score(tuner.system_, test, args.metric)
-        tuning["test"] = {"file": args.test, "sha256": _sha256(args.test), "n_samples": len(test),
+        tuning["test"] = {"file": recorded_path(args.test), "sha256": _sha256(args.test), "n_samples": len(test),
                           "initial": initial_test, "final": final_test}
     tuning["command"] = _command(args)
     tuned = dataclasses.replace(tuner.system_, name=Path(args.output).stem,
@@ -152,4 +181,6 @@ def run(args: argparse.Namespace) -> int:
     if test is not None:
         print(f"  test {args.metric}: {initial_test:.5f} (start) -> {final_test:.5f} (tuned)")
     print(f"written to {args.output}")
+    print(f"\nfuzzrisk check {args.output}:")
+    print(fuzzcore.verify(tuned))
     return 0

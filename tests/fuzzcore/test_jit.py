@@ -17,7 +17,8 @@ KERNEL_MODULES = sorted(
 
 def test_kernel_modules_found():
     assert KERNEL_MODULES == [
-        "fuzzcore._kernels", "fuzzcore.tune._objective_kernels", "monitor._alignment_kernels",
+        "fuzzcore._kernels", "fuzzcore.tune._objective_kernels", "fuzzcore.verification._kernels",
+        "monitor._alignment_kernels",
         "monitor.depth._retrieval_kernels", "monitor.geometry._box_kernels",
         "monitor.geometry._camera_kernels", "monitor.synthetic._degrade_kernels",
         "monitor.synthetic._raycast_kernels",

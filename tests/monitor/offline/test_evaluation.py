@@ -37,7 +37,8 @@ def boxes(*rows):
 
 def observation(S, P, G, status=OK, iou=math.nan, rdd=math.nan, index=0):
     report = RiskReport(risk=0.5, status=status, iou=iou, rdd=rdd, S=S, P=P)
-    return Observation("scene", "nominal", index, 0.5 * index, report, G, score(P, G))
+    return Observation(scene="scene", condition="nominal", index=index, timestamp=0.5 * index,
+                       report=report, G=G, P=P, truth=score(P, G))
 
 
 def test_paper_thresholds():
