@@ -72,6 +72,7 @@ def _zmf(a, b, x):
     y[i2] = 1 - 2 * ((x[i2] - a) / (b - a)) ** 2
     i3 = (mid < x) & (x <= b)
     y[i3] = 2 * ((b - x[i3]) / (b - a)) ** 2
+    y[x >= b] = 0  # last, as zmf.m: when (a + b)/2 rounds to b, x == b is in both ranges above
     return y
 
 

@@ -24,7 +24,6 @@ from monitor.risk_monitor import RiskMonitor
 from monitor.userfiles import check_output, write_text
 from monitor.shipped import shipped_rules
 
-HELP = "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"
 FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
 
 

@@ -23,8 +23,6 @@ from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
 from monitor.depth.prior import build_prior, save_prior
 from monitor.userfiles import check_output
 
-HELP = "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"
-
 #: A training map whose median valid value is below this many metres is refused (see above).
 MIN_MEDIAN_DEPTH_M = 1.0
 

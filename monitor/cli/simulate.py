@@ -26,8 +26,6 @@ from tqdm import tqdm
 
 from monitor.userfiles import check_output_folder, write_text
 
-HELP = "closed loop with traffic: collisions avoided and false braking of the monitor's shield"
-
 SWEEP_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 #: (threshold - release, hold_frames) of the sweep's hysteresis settings
 SWEEP_HYSTERESIS = ((0.0, 0), (0.1, 0), (0.0, 5), (0.1, 5))

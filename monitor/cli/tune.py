@@ -38,8 +38,6 @@ import fuzzcore
 from fuzzcore.io import check_save_path
 from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
 
-HELP = "tune a rule base on a feature table: membership functions (patternsearch), rules (pso) or both (joint)"
-
 METHODS = ("patternsearch", "pso", "joint")
 
 
