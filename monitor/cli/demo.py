@@ -38,8 +38,6 @@ from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
 
-HELP = "run the monitor on built-in synthetic scenes and write reports and figures"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-demo", help="output folder (default %(default)s)")

@@ -41,8 +41,6 @@ from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
 from monitor.userfiles import check_output_folder, write_text
 
-HELP = "the monitor's quality measures and the paper's validation tables, on synthetic or recorded scenes"
-
 QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
            ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),

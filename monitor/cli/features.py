@@ -22,7 +22,6 @@ from monitor.offline.evaluation import feature_rows
 from monitor.offline.run import observe_plans
 from monitor.userfiles import check_output, write_text
 
-HELP = "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"
 FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
 
 

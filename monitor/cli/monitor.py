@@ -32,9 +32,6 @@ from monitor.offline.run_output import COLUMNS, RunOutput
 from monitor.report.tables import format_table
 from monitor.shipped import shipped_rules
 
-HELP = "run the monitor over recordings (yours, nuScenes, synthetic): per-frame reports, timelines, summary"
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-monitor", help="output folder (default %(default)s)")
     parser.add_argument("--rules", default=None, help="rule base (default: the shipped rules/fuzzrisk.yaml)")

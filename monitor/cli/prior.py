@@ -8,7 +8,8 @@ Streams the depth maps of DEPTH_DIR (``.npy`` metres or 16-bit ``.png``, see
 The output is checked before any map is read: it ends in ``.npy``, its folder exists, it
 is not inside DEPTH_DIR (a prior written there would be read as a depth map by the next
 run), and an existing file is replaced only with ``--overwrite``; it is written whole or not
-at all. A file in DEPTH_DIR whose median valid value is below :data:`monitor.depth.prior.MIN_MEDIAN_DEPTH_M`
+at all. A file in DEPTH_DIR whose median valid value is below
+:data:`monitor.depth.prior.MIN_MEDIAN_DEPTH_M`
 (1 m) is refused, naming it: as metres the whole view would be within reach of the
 camera, so it is an inverse depth in 1/m, such as a prior from an earlier run.
 """
@@ -24,7 +25,6 @@ from monitor.cli.scenes import add_parallel_arguments
 from monitor.depth.prior import prior_of_files, save_prior
 from monitor.userfiles import check_output
 
-HELP = "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     actions = parser.add_subparsers(dest="action", metavar="ACTION", required=True)

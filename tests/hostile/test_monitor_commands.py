@@ -57,13 +57,13 @@ def test_a_prior_in_the_depth_folder_is_refused_by_name(depth_dir, tmp_path, cap
     (["eval", "-o", "{tmp}/missing/deeper"], "does not exist"),
     (["eval", "-o", "{tmp}/old"], "already holds report.md"),
     (["demo", "-o", "{tmp}/old"], "already holds report.md"),
-    (["simulate", "-o", "{tmp}/old"], "already holds simulation.png, trials.jsonl"),
+    (["simulate", "-o", "{tmp}/old"], "already holds runs.jsonl, traces.png"),
 ])
 def test_outputs_are_checked_before_the_work(argv, message, depth_dir, tmp_path, capsys):
     (tmp_path / "existing.csv").write_text("mine")
     old = tmp_path / "old"
     old.mkdir()
-    for name in ("report.md", "simulation.png", "trials.jsonl"):
+    for name in ("report.md", "runs.jsonl", "traces.png"):
         (old / name).write_text("mine")
     argv = [a.format(depth=depth_dir, tmp=tmp_path) for a in argv]
     assert main(argv) == 2
@@ -71,7 +71,7 @@ def test_outputs_are_checked_before_the_work(argv, message, depth_dir, tmp_path,
     assert message in err, err
     # nothing was replaced
     assert (tmp_path / "existing.csv").read_text() == "mine"
-    assert all((old / n).read_text() == "mine" for n in ("report.md", "simulation.png", "trials.jsonl"))
+    assert all((old / n).read_text() == "mine" for n in ("report.md", "runs.jsonl", "traces.png"))
 
 
 def test_features_overwrite_replaces_whole(tmp_path, capsys):
