@@ -1,5 +1,5 @@
-"""Smoke tests of eval and convert end to end (simulate has tests/monitor/cli/test_simulate.py): small sizes, real outputs checked against
-what they must equal (convert's refusals are in tests/hostile)."""
+"""Smoke tests of eval and convert end to end: small sizes, real outputs checked against what
+they must equal (simulate's are in test_simulate.py, convert's refusals in tests/hostile)."""
 import csv
 import json
 import struct
