@@ -7,12 +7,13 @@ finite and > 0; NaN fails every comparison.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 _INF = np.float32(np.inf)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def band_counts(depth, first_row, near, far, invalid, row_inverse, row_valid):
     """Count the pixels of rows ``first_row:`` of ``depth`` (float32 (H, W), metres).
 

@@ -1,5 +1,5 @@
-"""Smoke tests of eval, simulate and convert end to end: small sizes, real outputs checked against
-what they must equal (convert's refusals are in tests/hostile)."""
+"""Smoke tests of eval and convert end to end: small sizes, real outputs checked against what
+they must equal (simulate's are in test_simulate.py, convert's refusals in tests/hostile)."""
 import csv
 import json
 import struct
@@ -61,32 +61,6 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
 def test_eval_refuses_an_empty_rules_folder(tmp_path, capsys):
     assert main(["eval", "-o", str(tmp_path / "e"), "--rules-dir", str(tmp_path), *SMALL]) == 2
     assert f"no rule bases (.yaml, .fis) in {tmp_path}" in capsys.readouterr().err
-
-
-def test_simulate_writes_both_drives_of_each_seed(tmp_path, capsys):
-    out = tmp_path / "sim"
-    assert main(["simulate", "-o", str(out), "--trials", "2", "--seed", "3"]) == 0
-    printed = capsys.readouterr().out
-    trials = [json.loads(line) for line in (out / "trials.jsonl").read_text().splitlines()]
-    # per seed: the baseline drive, then the shielded one
-    assert [(t["seed"], t["shielded"]) for t in trials] == [(3, False), (3, True), (4, False), (4, True)]
-    for t in trials:
-        n = len(t["time"])
-        assert n > 0 and len(t["gap"]) == len(t["risk"]) == len(t["speed"]) == n
-        # the closest approach: 0 after a collision, else at most the last gap seen (the car
-        # may roll on after it, while braking to a stop)
-        assert t["min_gap"] == 0.0 if t["collided"] else 0.0 < t["min_gap"] <= min(t["gap"])
-        assert all(0.0 <= r <= 1.0 for r in t["risk"]) if t["shielded"] else \
-            all(r is None or r != r for r in t["risk"])  # the baseline runs no monitor: NaN
-    baseline = sum(t["collided"] for t in trials if not t["shielded"])
-    shielded = sum(t["collided"] for t in trials if t["shielded"])
-    assert f"collisions: baseline {baseline}/2, with the shield {shielded}/2" in printed
-    assert _png_size(out / "simulation.png") == (11 * 80, round(3.8 * 80))
-
-
-def test_simulate_refuses_zero_trials(tmp_path, capsys):
-    assert main(["simulate", "-o", str(tmp_path / "s"), "--trials", "0"]) == 2
-    assert "--trials 0: must be >= 1" in capsys.readouterr().err
 
 
 def test_convert_round_trip_keeps_every_output(tmp_path, capsys):
