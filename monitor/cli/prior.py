@@ -2,16 +2,17 @@
 
 Streams the depth maps of DEPTH_DIR (``.npy`` metres or 16-bit ``.png``, see
 :mod:`monitor.depth.files`) in sorted frame order through :class:`monitor.depth.prior.InverseDepthPrior`
-(constant memory; in parts on ``--workers`` processes or ``--ray``, the same prior bit for bit) and writes the per-pixel mean of 1/D over valid samples as float32
-``.npy`` (1/m, NaN where no frame had a valid depth).
+(constant memory; in parts on ``--workers`` processes or ``--ray``, the same prior bit for
+bit) and writes the per-pixel mean of 1/D over valid samples as float32 ``.npy`` (1/m, NaN
+where no frame had a valid depth).
 
 The output is checked before any map is read: it ends in ``.npy``, its folder exists, it
 is not inside DEPTH_DIR (a prior written there would be read as a depth map by the next
 run), and an existing file is replaced only with ``--overwrite``; it is written whole or not
 at all. A file in DEPTH_DIR whose median valid value is below
-:data:`monitor.depth.prior.MIN_MEDIAN_DEPTH_M`
-(1 m) is refused, naming it: as metres the whole view would be within reach of the
-camera, so it is an inverse depth in 1/m, such as a prior from an earlier run.
+:data:`monitor.depth.prior.MIN_MEDIAN_DEPTH_M` (1 m) is refused, naming it: as metres the
+whole view would be within reach of the camera, so it is an inverse depth in 1/m, such as a
+prior from an earlier run.
 """
 from __future__ import annotations
 

@@ -191,7 +191,8 @@ def _select_nuscenes(args: argparse.Namespace) -> Selection:
         raise ValueError(f"{args.detections} covers no scene of nuScenes {args.version} at {args.nuscenes}")
     camera = _one_camera(scenes)
     plans = [ScenePlan.of_records(s.name, s.condition, s.records()) for s in scenes]
-    depth = args.depth_dir if args.depth_dir is not None else f"{args.depth_model} ({args.depth_preset}) on the images"
+    depth = (args.depth_dir if args.depth_dir is not None
+             else f"{args.depth_model} ({args.depth_preset}) on the images")
     note = (f"Data: nuScenes {args.version} at {args.nuscenes}, {args.camera}, {len(scenes)} scenes "
             f"({len(reader.uncovered_scenes)} more not in the detections); detections: {args.detections}; "
             f"depth: {depth}; prior: {args.prior}.")
@@ -206,7 +207,8 @@ def count_frames(args: argparse.Namespace, split: str | None) -> int | None:
     return (len(args.conditions) * per_split + args.prior_scenes) * args.frames
 
 
-def run_spec(args: argparse.Namespace, selection: Selection, config, *, rules=None, explain: bool = False) -> RunSpec:
+def run_spec(args: argparse.Namespace, selection: Selection, config, *, rules=None,
+             explain: bool = False) -> RunSpec:
     """What every worker builds: the shipped (or given) rule base, the prior, camera, config, depth network."""
     return RunSpec(Path(rules) if rules is not None else shipped_rules(), selection.prior, selection.camera,
                    config, explain=explain, depth_model=depth_model(args))
