@@ -36,10 +36,11 @@ from typing import Iterator
 
 import numpy as np
 
+from fuzzcore.outputs import write_text
 from monitor.datasets.fields import JsonFields
 from monitor.datasets.frames import MAPS, Frame, Scene
 from monitor.geometry.camera import Camera
-from monitor.userfiles import read_npy, write_npy, write_text
+from monitor.userfiles import read_npy, write_npy
 
 FORMAT = "fuzzrisk-scene"
 VERSION = 1
