@@ -18,29 +18,37 @@ _INF = np.float32(np.inf)
 
 
 @njit(cache=True, error_model="numpy")
-def block_points(depth, stride, M, origin, xs, ys, zs, ds, invalid_px):
-    """Mean valid depth of each block, back-projected through the block's centre.
+def block_points(depth, stride, edge_spread, M, origin, xs, ys, zs, ds, invalid_px):
+    """One depth per block, back-projected through the block's centre.
 
-    ``depth`` is float32 (H, W) metres; ``M`` float64 (3, 3) maps a pixel ``(u, v, 1)`` to
-    its ego-frame ray scaled to camera z = 1 (``R K^-1``); ``origin`` float64 (3,) is the
-    camera centre in the ego frame. The blocks cover rows ``r stride .. (r + 1) stride - 1``
-    and columns likewise (partial at the last row and column); the centre of a block
-    spanning pixels ``[j0, j1) x [i0, i1)`` is ``((j0 + j1) / 2, (i0 + i1) / 2)``.
-    Outputs, float32 (rows, cols): ``xs, ys, zs`` the ego-frame point (metres) and ``ds``
-    the mean camera depth; a block without a valid pixel gets 0 in all four. ``invalid_px``
-    int32 (rows, cols): the block's invalid pixels. Returns the number of invalid pixels.
+    A block's depth is the mean of its valid depths, or, at an edge (the largest exceeds
+    the smallest by more than ``edge_spread`` times the smallest), its smallest: the nearer
+    surface, never a point floating between two. ``depth`` is float32 (H, W) metres;
+    ``M`` float64 (3, 3) maps a pixel ``(u, v, 1)`` to its ego-frame ray scaled to camera
+    z = 1 (``R K^-1``); ``origin`` float64 (3,) is the camera centre in the ego frame. The
+    blocks cover rows ``r stride .. (r + 1) stride - 1`` and columns likewise (partial at
+    the last row and column); the centre of a block spanning pixels ``[j0, j1) x [i0, i1)``
+    is ``((j0 + j1) / 2, (i0 + i1) / 2)``. Outputs, float32 (rows, cols): ``xs, ys, zs``
+    the ego-frame point (metres) and ``ds`` the camera depth; a block without a valid pixel
+    gets 0 in all four. ``invalid_px`` int32 (rows, cols): the block's invalid pixels.
+    Returns the number of invalid pixels.
     """
     height, width = depth.shape
     rows, cols = ds.shape
     zero = np.float32(0.0)
     sums = np.empty(width, dtype=np.float32)
     counts = np.empty(width, dtype=np.int32)
+    lows = np.empty(width, dtype=np.float32)
+    highs = np.empty(width, dtype=np.float32)
+    spread = np.float32(1.0 + edge_spread)
     n_invalid = 0
     for r in range(rows):
         i0 = r * stride
         i1 = min(i0 + stride, height)
         sums[:] = zero
         counts[:] = 0
+        lows[:] = _INF
+        highs[:] = zero
         for i in range(i0, i1):
             row = depth[i]
             for j in range(width):
@@ -48,15 +56,21 @@ def block_points(depth, stride, M, origin, xs, ys, zs, ds, invalid_px):
                 valid = (d > zero) & (d < _INF)
                 sums[j] += d if valid else zero
                 counts[j] += np.int32(valid)
+                lows[j] = min(lows[j], d if valid else _INF)
+                highs[j] = max(highs[j], d if valid else zero)
         v = 0.5 * (i0 + i1)
         for c in range(cols):
             j0 = c * stride
             j1 = min(j0 + stride, width)
             total = zero
             n = 0
+            low = _INF
+            high = zero
             for j in range(j0, j1):
                 total += sums[j]
                 n += counts[j]
+                low = min(low, lows[j])
+                high = max(high, highs[j])
             missing = (i1 - i0) * (j1 - j0) - n
             invalid_px[r, c] = missing
             n_invalid += missing
@@ -66,7 +80,7 @@ def block_points(depth, stride, M, origin, xs, ys, zs, ds, invalid_px):
                 zs[r, c] = zero
                 ds[r, c] = zero
                 continue
-            d = total / np.float32(n)
+            d = total / np.float32(n) if high <= spread * low else low
             u = 0.5 * (j0 + j1)
             xs[r, c] = origin[0] + d * (M[0, 0] * u + M[0, 1] * v + M[0, 2])
             ys[r, c] = origin[1] + d * (M[1, 0] * u + M[1, 1] * v + M[1, 2])
@@ -76,19 +90,22 @@ def block_points(depth, stride, M, origin, xs, ys, zs, ds, invalid_px):
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _lateral(x, y, centre_y, cos_heading, step):
-    """Lateral offset of ``(x, y)`` from the corridor's centreline, NaN outside its reach."""
+def _lateral(x, y, centre_y, tan_heading, step):
+    """Lateral offset of ``(x, y)`` from the corridor's centreline (its tangent line at the
+    middle of the point's table row, see :meth:`monitor.geometry.corridor.Corridor.table`),
+    NaN outside its reach."""
     if not x >= 0.0:
         return np.nan
     k = int(x / step)
     if k >= centre_y.shape[0]:
         return np.nan
-    return abs(y - centre_y[k]) * cos_heading[k]
+    t = tan_heading[k]
+    return abs(y - centre_y[k] - t * (x - (k + 0.5) * step)) / math.sqrt(1.0 + t * t)
 
 
 @njit(cache=True, error_model="numpy")
 def footprint_invalid(ground_x, ground_y, ground_d, invalid_px, block_px, max_range,
-                      centre_y, cos_heading, step, half_width):
+                      centre_y, tan_heading, step, half_width):
     """Pixels and invalid pixels of the blocks that look at the corridor's ground.
 
     ``ground_x, ground_y, ground_d`` (flat float64) are where each block's centre ray meets
@@ -101,7 +118,7 @@ def footprint_invalid(ground_x, ground_y, ground_d, invalid_px, block_px, max_ra
     n_invalid = 0
     for k in range(ground_d.shape[0]):
         if ground_d[k] <= max_range and \
-                _lateral(ground_x[k], ground_y[k], centre_y, cos_heading, step) <= half_width:
+                _lateral(ground_x[k], ground_y[k], centre_y, tan_heading, step) <= half_width:
             n_px += block_px[k]
             n_invalid += invalid_px[k]
     return n_px, n_invalid
@@ -125,7 +142,8 @@ def ground_candidates(xs, ys, zs, ds, x_max, band0, band_slope, out):
 
 @njit(cache=True, error_model="numpy")
 def ransac_plane(xs, ys, zs, idx, n, uniforms, n_score, tol, max_slope, max_offset):
-    """The plane ``z = a x + b y + c`` through three candidates with the most inliers.
+    """The plane ``z = a x + b y + c`` through three candidates with the most inliers
+    (float64 arithmetic on the float32 points).
 
     Hypothesis i goes through candidates ``idx[floor(uniforms[i, m] * n)]``, m = 0, 1, 2
     (``uniforms`` float64 (iterations, 3) in [0, 1)). Planes with ``a^2 + b^2 >
@@ -142,14 +160,15 @@ def ransac_plane(xs, ys, zs, idx, n, uniforms, n_score, tol, max_slope, max_offs
         i = idx[min(int(uniforms[it, 0] * n), n - 1)]
         j = idx[min(int(uniforms[it, 1] * n), n - 1)]
         k = idx[min(int(uniforms[it, 2] * n), n - 1)]
-        ux, uy, uz = xs[j] - xs[i], ys[j] - ys[i], zs[j] - zs[i]
-        vx, vy, vz = xs[k] - xs[i], ys[k] - ys[i], zs[k] - zs[i]
+        xi, yi, zi = float(xs[i]), float(ys[i]), float(zs[i])
+        ux, uy, uz = xs[j] - xi, ys[j] - yi, zs[j] - zi
+        vx, vy, vz = xs[k] - xi, ys[k] - yi, zs[k] - zi
         nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
         norm = math.sqrt(nx * nx + ny * ny + nz * nz)
         if not abs(nz) > 1e-6 * norm:  # degenerate triple or a vertical plane
             continue
         a, b = -nx / nz, -ny / nz
-        c = zs[i] - a * xs[i] - b * ys[i]
+        c = zi - a * xi - b * yi
         if a * a + b * b > max_slope * max_slope or abs(c) > max_offset:
             continue
         score = 0
@@ -195,7 +214,7 @@ def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
 
 @njit(cache=True, error_model="numpy")
 def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
-             centre_y, cos_heading, step, half_width, obstacle, corridor):
+             centre_y, tan_heading, step, half_width, obstacle, corridor):
     """Which blocks stand above the road, and which of those are inside the corridor.
 
     A valid block's height above the plane is ``h = z - (a x + b y + c)``. ``obstacle``
@@ -218,7 +237,7 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
         n_below += h < -below_margin
         if h >= min_height and h <= max_height and d <= max_range:
             obstacle[k] = 1
-            corridor[k] = _lateral(x, y, centre_y, cos_heading, step) <= half_width
+            corridor[k] = _lateral(x, y, centre_y, tan_heading, step) <= half_width
     return n_valid, n_below
 
 

@@ -6,10 +6,12 @@ beside the road become objects, and an unusual road looks like one. This view us
 monitor knows, the camera's intrinsics and mounting (:class:`~monitor.geometry.camera.Camera`),
 in the manner of the stereo-vision obstacle detectors:
 
-1. **Points.** The depth map is cut into ``stride x stride`` pixel blocks; each block's mean
-   valid depth is back-projected through the block's centre into the ego frame (x forward,
-   y left, z up, origin on the ground). Invalid pixels (NaN, inf, <= 0) are left out of the
-   means; a block without a valid pixel is no point.
+1. **Points.** The depth map is cut into ``stride x stride`` pixel blocks; each block's
+   depth is back-projected through the block's centre into the ego frame (x forward, y
+   left, z up, origin on the ground). A block's depth is the mean of its valid pixels
+   (NaN, inf and <= 0 are left out), or at an edge (depths spread by more than
+   ``edge_spread``) its nearest: a mean across an edge would be a point floating between
+   the two surfaces, bridging objects. A block without a valid pixel is no point.
 2. **Road surface.** Labayrade et al.'s v-disparity (IV 2002) rests on the fact that a
    planar road seen by a pinhole camera has a disparity (an inverse depth) affine in the
    pixel coordinates, a line in the v-disparity image when the camera does not roll; they
@@ -113,6 +115,9 @@ class GeometricParams:
     ----------
     stride : int
         Block size, pixels (>= 1): each ``stride x stride`` block is one point.
+    edge_spread : float
+        A block whose largest valid depth exceeds its smallest by more than this share of
+        the smallest (>= 0) is an edge and reads its smallest depth; otherwise its mean.
     min_height, max_height : float
         Metres above the road plane that an obstacle block's point must be within
         (0 <= min_height < max_height): below is road, kerb or debris too low to matter,
@@ -163,6 +168,7 @@ class GeometricParams:
     """
 
     stride: int = 4
+    edge_spread: float = 0.15
     min_height: float = 0.2
     max_height: float = 2.5
     corridor_half_width: float = 1.75
@@ -196,7 +202,7 @@ class GeometricParams:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}, must be a finite number > 0")
-        for name in ("min_height", "max_height", "max_height_offset", "min_size"):
+        for name in ("edge_spread", "min_height", "max_height", "max_height_offset", "min_size"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} = {value!r}, must be a finite number of metres >= 0")
@@ -349,16 +355,16 @@ class GeometricRetriever:
             table = corridor.table(self._x_end, CORRIDOR_STEP_M)
         else:
             raise ValueError(f"corridor is a {type(corridor).__name__}, expected a Corridor or None")
-        centre_y, cos_heading = table
+        centre_y, tan_heading = table
         xs, ys, zs, ds = self._points
-        n_invalid = kernels.block_points(depth, params.stride, self._M, self._origin, xs, ys, zs, ds,
-                                         self._invalid_px)
+        n_invalid = kernels.block_points(depth, params.stride, params.edge_spread, self._M,
+                                         self._origin, xs, ys, zs, ds, self._invalid_px)
         invalid_fraction = n_invalid / depth.size
         if invalid_fraction > params.max_invalid_fraction:
             raise BlindViewError("invalid", invalid_fraction, params.max_invalid_fraction)
         n_px, n_px_invalid = kernels.footprint_invalid(
             self._ground_x, self._ground_y, self._ground_d, self._invalid_px.ravel(), self._block_px,
-            params.max_range, centre_y, cos_heading, CORRIDOR_STEP_M, corridor.half_width)
+            params.max_range, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width)
         corridor_invalid = n_px_invalid / n_px if n_px else 0.0
         if corridor_invalid > params.max_corridor_invalid_fraction:
             raise BlindViewError("corridor_invalid", corridor_invalid,
@@ -369,7 +375,7 @@ class GeometricRetriever:
         a, b, c = ground
         n_valid, n_below = kernels.classify(
             x, y, z, d, a, b, c, params.min_height, params.max_height, params.max_range,
-            params.below_margin, centre_y, cos_heading, CORRIDOR_STEP_M, corridor.half_width,
+            params.below_margin, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width,
             self._obstacle.ravel(), self._corridor.ravel())
         below = n_below / n_valid if n_valid else 0.0
         if below > params.max_below_fraction:
