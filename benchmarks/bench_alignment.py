@@ -78,7 +78,7 @@ def ours(S, P):
 @pytest.fixture(scope="module")
 def warm_up_seconds():
     start = time.perf_counter()
-    alignment.warm_up()  # compiles the kernels, or loads them from numba's cache
+    alignment.warmup()  # compiles the kernels, or loads them from numba's cache
     return time.perf_counter() - start
 
 

@@ -23,7 +23,7 @@ import pytest
 from monitor.depth import _retrieval_kernels as kernels
 from monitor.geometry.boxes import within_range
 from monitor.depth.prior import build_prior
-from monitor.depth.retrieval import RetrievalParams, Retriever, _block_means, warm_up
+from monitor.depth.retrieval import RetrievalParams, Retriever, _block_means, warmup
 from monitor.synthetic.generate import generate_frames
 
 PARAMS = RetrievalParams()
@@ -54,7 +54,7 @@ def frame():
     training = generate_frames("nominal", 1000, n_frames=10)
     prior = build_prior((str(f.index), f.depth_est) for f in training).mean()
     depth = list(generate_frames("nominal", 0, n_frames=4))[3].depth_est
-    warm_up()
+    warmup()
     return depth, prior, _block_means(prior)  # the block prior: once per camera, as Retriever
 
 

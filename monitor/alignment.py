@@ -6,12 +6,14 @@ IoU and RDD; a pair counts only when ``IoU > alpha`` and ``|RDD| < beta``; an S 
 counted pair scores IoU = 0 and RDD = 1; the frame's features are the means over S,
 IoU~ and RDD~.
 
-A frame without safety-critical objects (empty S) has no features: its means are NaN and
-its :attr:`Alignment.status` is :data:`NO_OBJECTS`. The caller must check the status; the
-NaN is there so that forgetting to cannot produce a confident number.
+A frame without safety-critical objects (empty S) has no features: its means are NaN
+(:attr:`Alignment.n_objects` is 0). The caller must check; the NaN is there so that
+forgetting to cannot produce a confident number. (What the monitor reports for such a
+frame is its status ``no-objects``, see :mod:`monitor.risk_monitor`.)
 """
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,11 +21,6 @@ from scipy.optimize import linear_sum_assignment
 
 from monitor.geometry import _box_kernels as _k
 from monitor.geometry.boxes import as_boxes
-
-#: :attr:`Alignment.status` of a frame with at least one safety-critical object.
-OK = "ok"
-#: :attr:`Alignment.status` of a frame with no safety-critical object: features undefined.
-NO_OBJECTS = "no-objects"
 
 #: The paper's matching thresholds (Table I, second row).
 DEFAULT_ALPHA = 0.3
@@ -69,11 +66,6 @@ class Alignment:
         return self.partner.shape[0]
 
     @property
-    def status(self) -> str:
-        """:data:`OK`, or :data:`NO_OBJECTS` when S is empty (the means are then NaN)."""
-        return OK if self.n_objects else NO_OBJECTS
-
-    @property
     def iou(self) -> np.ndarray:
         """(M,) per-S IoU score: ``pair_iou`` where matched, else 0."""
         return np.where(self.matched, self.pair_iou, 0.0)
@@ -111,7 +103,29 @@ def assign_by_centre(a, b) -> np.ndarray:
     return _assign(as_boxes(a, "a"), as_boxes(b, "b"))
 
 
-def _check_thresholds(alpha, beta) -> tuple[float, float]:
+def check_thresholds(alpha, beta) -> tuple[float, float]:
+    """Validate the matching thresholds (the one rule for them, also the configuration's).
+
+    Parameters
+    ----------
+    alpha : real number in [0, 1]
+        A pair counts only when its IoU is ``> alpha`` (1: no pair counts).
+    beta : real number, finite and > 0
+        A pair counts only when ``|RDD| < beta`` (RDD lies in [-1, 1], so beta > 1 drops
+        the depth test).
+
+    Returns
+    -------
+    (float, float)
+
+    Raises
+    ------
+    ValueError
+        Naming the threshold, its value and the rule (strings and booleans are refused).
+    """
+    for name, value in (("alpha", alpha), ("beta", beta)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise ValueError(f"{name} = {value!r}, must be a number")
     alpha, beta = float(alpha), float(beta)
     if not 0.0 <= alpha <= 1.0:
         raise ValueError(f"alpha = {alpha!r}, expected an IoU threshold in [0, 1]")
@@ -138,15 +152,15 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Ali
     Returns
     -------
     Alignment
-        ``iou_mean`` and ``rdd_mean`` are IoU~ and RDD~. Empty S gives status
-        :data:`NO_OBJECTS` and NaN means; empty P gives every S IoU 0 and RDD 1.
+        ``iou_mean`` and ``rdd_mean`` are IoU~ and RDD~. Empty S gives NaN means; empty P
+        gives every S IoU 0 and RDD 1.
 
     Raises
     ------
     ValueError
         Invalid boxes (message names ``S`` or ``P``, the row and column) or thresholds.
     """
-    alpha, beta = _check_thresholds(alpha, beta)
+    alpha, beta = check_thresholds(alpha, beta)
     S = as_boxes(S, "S", positive_depth=True)
     P = as_boxes(P, "P")
     partner = _assign(S, P)
@@ -162,7 +176,7 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Ali
     return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta)
 
 
-def warm_up() -> None:
+def warmup() -> None:
     """Compile (or load from the cache) every kernel :func:`align` uses.
 
     Call once before a real-time loop so that its first frame does not pay the compile.

@@ -1,34 +1,143 @@
 """The monitor's configuration: one YAML file, defaults shipped in the package.
 
-:func:`load_config` reads ``monitor/default_config.yaml`` and overlays a user file that
-names only what it changes. Unknown keys, wrong types and values out of range are errors
-naming the file and the key.
+The configuration is a tree of frozen dataclasses that mirrors the YAML file: one class
+per section (``alignment``, ``detections``, ``retrieval``, ``risk``, ``shield``) and the
+scalars at the top (``max_range``). :func:`load_config` reads
+``monitor/default_config.yaml`` and overlays a user file that names only what it changes;
+the file's keys are read generically from the dataclasses' fields and types, so a new field
+is a new key with nothing else to keep in step. A section's field that has the name of a
+top-level field (``retrieval.max_range``) is not a key of its own: it takes the top-level
+value, so one range limit holds everywhere.
+
+Errors are :class:`ConfigError` naming the file and the key path
+(``risk.fail_safe = '1.0', must be a number``). Duplicate keys, unknown keys, wrong types,
+values out of range and nesting deeper than :data:`MAX_NESTING` are errors.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, fields, replace
+import numbers
+import types
+import typing
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA
-from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds
 from monitor.depth.retrieval import RetrievalParams
+from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.geometry.camera import DISTANCES
 
 DEFAULT_CONFIG_PATH = Path(__file__).with_name("default_config.yaml")
-DISTANCE_MODES = ("camera_depth", "ego_closest")
+
+#: Deepest nesting of mappings and lists a configuration file may have (the real one has 2).
+MAX_NESTING = 8
 
 
-def _unit(value: float, name: str) -> None:
-    if not (math.isfinite(value) and 0.0 <= value <= 1.0):
+class ConfigError(ValueError):
+    """A configuration file or value that cannot be used; the message names file and key."""
+
+
+def _number(value: Any, name: str) -> float:
+    """``value`` as a float, or a ValueError naming ``name`` (bool and str are not numbers)."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        hint = ""
+        if isinstance(value, str):
+            try:
+                float(value)
+                hint = " (YAML 1.1 reads a number without a dot, such as 1e3, as text: write 1.0e3)"
+            except ValueError:
+                pass
+        raise ValueError(f"{name} = {value!r}, must be a number{hint}")
+    return float(value)
+
+
+def _unit(value: Any, name: str) -> float:
+    value = _number(value, name)
+    if not 0.0 <= value <= 1.0:
         raise ValueError(f"{name} = {value!r}, must be in [0, 1]")
+    return value
+
+
+def _set(obj, name: str, value: Any) -> None:
+    object.__setattr__(obj, name, value)
+
+
+@dataclass(frozen=True)
+class AlignmentConfig:
+    """Matching thresholds: a pair counts if IoU > alpha and |RDD| < beta.
+
+    The rule for their values is :func:`monitor.alignment.check_thresholds`.
+    """
+
+    alpha: float = DEFAULT_ALPHA
+    beta: float = DEFAULT_BETA
+
+    def __post_init__(self):
+        alpha, beta = check_thresholds(self.alpha, self.beta)
+        _set(self, "alpha", alpha)
+        _set(self, "beta", beta)
+
+
+@dataclass(frozen=True)
+class DetectionsConfig:
+    """How the detector's 3D boxes become P.
+
+    Attributes
+    ----------
+    min_score : float in [0, 1]
+        Detections scoring below it are dropped before projection.
+    distance : str
+        How a detection's d is measured, one of :data:`monitor.geometry.camera.DISTANCES`
+        (see :func:`monitor.geometry.camera.project_boxes`).
+    """
+
+    min_score: float = 0.3
+    distance: str = "camera_depth"
+
+    def __post_init__(self):
+        _set(self, "min_score", _unit(self.min_score, "min_score"))
+        if self.distance not in DISTANCES:
+            raise ValueError(f"distance = {self.distance!r}, must be one of {', '.join(DISTANCES)}")
+
+
+@dataclass(frozen=True)
+class RiskConfig:
+    """Risks the monitor reports without the rule base.
+
+    Attributes
+    ----------
+    fail_safe : float in [0, 1]
+        Risk of an invalid frame (safe default 1.0).
+    no_objects : float in [0, 1]
+        Risk when the depth view finds no safety-critical object in range.
+    """
+
+    fail_safe: float = 1.0
+    no_objects: float = 0.0
+
+    def __post_init__(self):
+        _set(self, "fail_safe", _unit(self.fail_safe, "fail_safe"))
+        _set(self, "no_objects", _unit(self.no_objects, "no_objects"))
 
 
 @dataclass(frozen=True)
 class ShieldConfig:
-    """See :class:`monitor.shield.Shield`."""
+    """The shield's settings (see :class:`monitor.shield.Shield`).
+
+    Attributes
+    ----------
+    threshold : float in [0, 1]
+        Engage when the risk is above it.
+    release : float in [0, threshold]
+        Disengage when the risk is at or below it (``release == threshold``: no hysteresis).
+    hold_frames : int >= 0
+        Frames to stay engaged after the last frame above ``threshold``.
+    deceleration : float > 0
+        Requested deceleration while engaged, m/s^2.
+    """
 
     threshold: float = 0.5
     release: float = 0.5
@@ -36,139 +145,187 @@ class ShieldConfig:
     deceleration: float = 3.0
 
     def __post_init__(self):
-        _unit(self.threshold, "shield.threshold")
-        _unit(self.release, "shield.release")
+        _set(self, "threshold", _unit(self.threshold, "threshold"))
+        _set(self, "release", _unit(self.release, "release"))
         if self.release > self.threshold:
-            raise ValueError(f"shield.release = {self.release} must be <= shield.threshold = {self.threshold}")
-        if isinstance(self.hold_frames, bool) or not isinstance(self.hold_frames, int) or self.hold_frames < 0:
-            raise ValueError(f"shield.hold_frames = {self.hold_frames!r}, must be an integer >= 0")
-        if not (math.isfinite(self.deceleration) and self.deceleration > 0):
-            raise ValueError(f"shield.deceleration = {self.deceleration!r}, must be > 0 m/s^2")
+            raise ValueError(f"release = {self.release} must be <= threshold = {self.threshold}")
+        if isinstance(self.hold_frames, bool) or not isinstance(self.hold_frames, numbers.Integral) \
+                or self.hold_frames < 0:
+            raise ValueError(f"hold_frames = {self.hold_frames!r}, must be an integer >= 0")
+        _set(self, "hold_frames", int(self.hold_frames))
+        deceleration = _number(self.deceleration, "deceleration")
+        if not (math.isfinite(deceleration) and deceleration > 0):
+            raise ValueError(f"deceleration = {self.deceleration!r}, must be > 0 m/s^2")
+        _set(self, "deceleration", deceleration)
 
 
 @dataclass(frozen=True)
 class MonitorConfig:
-    """Every tunable of :class:`monitor.RiskMonitor`.
+    """Every tunable of :class:`monitor.RiskMonitor`, as the sections of its YAML file.
 
     Attributes
     ----------
-    alpha, beta : float
-        Matching thresholds: a pair counts if IoU > alpha and |RDD| < beta.
+    alignment : AlignmentConfig
     max_range : float
-        Metres; S (and G in evaluation) beyond it are ignored.
-    min_score : float
-        Detections scoring below it are dropped before projection.
-    distance : {"camera_depth", "ego_closest"}
-        How a detection's d is measured (see :func:`monitor.geometry.camera.project_boxes`).
+        Metres; S (and G in evaluation) beyond it are ignored. ``retrieval.max_range``
+        always equals it.
+    detections : DetectionsConfig
     retrieval : RetrievalParams
-        The depth view's parameters; its ``max_range`` always equals ``max_range`` here.
-    fail_safe_risk : float
-        Risk of an invalid frame (safe default 1.0).
-    no_objects_risk : float
-        Risk when the depth view finds no safety-critical object in range.
+        The depth view's parameters (:mod:`monitor.depth.retrieval`).
+    risk : RiskConfig
     shield : ShieldConfig
     """
 
-    alpha: float = DEFAULT_ALPHA
-    beta: float = DEFAULT_BETA
+    alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
     max_range: float = DEFAULT_RANGE_M
-    min_score: float = 0.3
-    distance: str = "camera_depth"
+    detections: DetectionsConfig = field(default_factory=DetectionsConfig)
     retrieval: RetrievalParams = field(default_factory=RetrievalParams)
-    fail_safe_risk: float = 1.0
-    no_objects_risk: float = 0.0
+    risk: RiskConfig = field(default_factory=RiskConfig)
     shield: ShieldConfig = field(default_factory=ShieldConfig)
 
     def __post_init__(self):
-        if not (math.isfinite(self.alpha) and 0.0 <= self.alpha < 1.0):
-            raise ValueError(f"alignment.alpha = {self.alpha!r}, must be in [0, 1)")
-        if not (math.isfinite(self.beta) and 0.0 < self.beta <= 1.0):
-            raise ValueError(f"alignment.beta = {self.beta!r}, must be in (0, 1]")
-        if not (math.isfinite(self.max_range) and self.max_range > 0):
+        hints = _hints(MonitorConfig)
+        for f in fields(self):
+            kind, value = hints[f.name], getattr(self, f.name)
+            if is_dataclass(kind) and not isinstance(value, kind):
+                raise ValueError(f"{f.name} is a {type(value).__name__}, expected a {kind.__name__}")
+        max_range = _number(self.max_range, "max_range")
+        if not (math.isfinite(max_range) and max_range > 0):
             raise ValueError(f"max_range = {self.max_range!r}, must be a finite number of metres > 0")
-        _unit(self.min_score, "detections.min_score")
-        if self.distance not in DISTANCE_MODES:
-            raise ValueError(f"detections.distance = {self.distance!r}, must be one of {DISTANCE_MODES}")
-        _unit(self.fail_safe_risk, "risk.fail_safe")
-        _unit(self.no_objects_risk, "risk.no_objects")
-        if self.retrieval.max_range != self.max_range:
-            object.__setattr__(self, "retrieval", replace(self.retrieval, max_range=self.max_range))
+        _set(self, "max_range", max_range)
+        if self.retrieval.max_range != max_range:
+            _set(self, "retrieval", replace(self.retrieval, max_range=max_range))
 
 
-# YAML section -> {key: MonitorConfig attribute}; None marks a nested dataclass section
-_LAYOUT = {
-    "alignment": {"alpha": "alpha", "beta": "beta"},
-    "max_range": "max_range",
-    "detections": {"min_score": "min_score", "distance": "distance"},
-    "retrieval": None,
-    "risk": {"fail_safe": "fail_safe_risk", "no_objects": "no_objects_risk"},
-    "shield": None,
-}
-_NESTED = {"retrieval": RetrievalParams, "shield": ShieldConfig}
+# ----------------------------------------------------------------------------- reading
+class _ConfigLoader(yaml.SafeLoader):
+    """Safe loading, plus: duplicate keys and deep nesting are errors (not last-wins, not a
+    RecursionError: PyYAML composes nested nodes recursively)."""
+
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._nesting = 0
+
+    def compose_node(self, parent, index):
+        self._nesting += 1
+        try:
+            if self._nesting > MAX_NESTING:
+                mark = self.peek_event().start_mark
+                raise yaml.MarkedYAMLError(problem=f"nested deeper than {MAX_NESTING} levels",
+                                           problem_mark=mark)
+            return super().compose_node(parent, index)
+        finally:
+            self._nesting -= 1
+
+    def construct_mapping(self, node, deep=False):
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                continue
+            key = self.construct_object(key_node, deep=True)
+            line = key_node.start_mark.line + 1
+            if isinstance(key, typing.Hashable) and key in seen:
+                raise yaml.MarkedYAMLError(problem=f"duplicate key {key!r} (first at line {seen[key]})",
+                                           problem_mark=key_node.start_mark)
+            if isinstance(key, typing.Hashable):
+                seen[key] = line
+        return super().construct_mapping(node, deep=deep)
 
 
 def _read(path: Path) -> dict:
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {exc}") from None
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+    try:
+        data = yaml.load(text, Loader=_ConfigLoader)
+    except yaml.MarkedYAMLError as exc:
+        where = f", line {exc.problem_mark.line + 1}" if exc.problem_mark else ""
+        raise ConfigError(f"{path}{where}: not a valid configuration: {exc.problem}") from None
+    except (yaml.YAMLError, ValueError, TypeError) as exc:  # PyYAML's constructors: a bad date, ...
+        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
     if data is None:
         return {}
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping of sections, got {type(data).__name__}")
+        raise ConfigError(f"{path}: expected a mapping of sections, got {type(data).__name__}")
     return data
 
 
-def _merge(base: dict, update: dict, path: Path) -> dict:
-    merged = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
-    for key, value in update.items():
-        if key not in _LAYOUT:
-            raise ValueError(f"{path}: unknown key {key!r}; expected one of {', '.join(_LAYOUT)}")
-        if isinstance(merged.get(key), dict):
-            if not isinstance(value, dict):
-                raise ValueError(f"{path}: {key} must be a mapping, got {value!r}")
-            unknown = sorted(set(value) - set(merged[key]))
-            if unknown:
-                raise ValueError(f"{path}: unknown key(s) {key}.{', '.join(unknown)}; "
-                                 f"expected {', '.join(sorted(merged[key]))}")
-            merged[key].update(value)
-        else:
-            merged[key] = value
-    return merged
+def _hints(cls) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
 
 
-def _number(value: Any, where: str) -> Any:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where} = {value!r}, must be a number")
-    return value
+def _value(value: Any, kind: Any, where: str) -> Any:
+    """A scalar of the file checked against its field's type (float, int, str, or X | None)."""
+    if isinstance(kind, types.UnionType) or typing.get_origin(kind) is typing.Union:
+        options = typing.get_args(kind)
+        if value is None and type(None) in options:
+            return None
+        (kind,) = [k for k in options if k is not type(None)]
+    if kind is float:
+        return _number(value, where)
+    if kind is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"{where} = {value!r}, must be an integer")
+        return value
+    if kind is str:
+        if not isinstance(value, str):
+            raise ValueError(f"{where} = {value!r}, must be text")
+        return value
+    raise TypeError(f"{where}: no reader for fields of type {kind!r}")  # a new field type
+
+
+def _section(cls, defaults: dict, user: dict, path: str, inherited: frozenset = frozenset()) -> Any:
+    """An instance of the dataclass ``cls`` from its default and user mappings.
+
+    Fields named in ``inherited`` are not keys: the enclosing section sets them.
+    """
+    hints = _hints(cls)
+    names = [f.name for f in fields(cls) if f.name not in inherited]
+    unknown = [key for key in user if key not in names]
+    if unknown:
+        raise ValueError(f"unknown key {path}{unknown[0]!s}; expected one of "
+                         f"{', '.join(path + n for n in names)}")
+    kwargs: dict[str, Any] = {}
+    nested = [n for n in names if is_dataclass(hints[n])]
+    for name in names:
+        if name in nested:
+            continue
+        source = user if name in user else defaults
+        if name in source:
+            kwargs[name] = _value(source[name], hints[name], path + name)
+    for name in nested:
+        sub = user.get(name, {})
+        if not isinstance(sub, dict):
+            raise ValueError(f"{path}{name} = {sub!r}, must be a mapping of keys")
+        sub_cls = hints[name]
+        shared = frozenset(f.name for f in fields(sub_cls)) & frozenset(names)
+        kwargs[name] = _section(sub_cls, defaults.get(name, {}), sub, f"{path}{name}.", shared)
+    try:
+        return cls(**kwargs)
+    except ValueError as exc:
+        raise ValueError(f"{path}{exc}") from None
 
 
 def load_config(path: str | Path | None = None) -> MonitorConfig:
-    """The shipped defaults, overlaid with the file at ``path`` when given."""
-    data = _read(DEFAULT_CONFIG_PATH)
-    source = DEFAULT_CONFIG_PATH
+    """The shipped defaults, overlaid with the file at ``path`` when given.
+
+    Raises
+    ------
+    FileNotFoundError
+        No file at ``path``.
+    ConfigError
+        Naming the file and the key path: unknown or duplicate keys, wrong types, values
+        out of range, a file that is not UTF-8 YAML or is nested too deeply.
+    """
+    defaults = _read(DEFAULT_CONFIG_PATH)
+    source, user = DEFAULT_CONFIG_PATH, {}
     if path is not None:
         source = Path(path)
         if not source.is_file():
             raise FileNotFoundError(f"{source}: no such configuration file")
-        data = _merge(data, _read(source), source)
-    kwargs: dict[str, Any] = {}
+        user = _read(source)
     try:
-        for section, layout in _LAYOUT.items():
-            value = data[section]
-            if layout is None:
-                cls = _NESTED[section]
-                names = {f.name for f in fields(cls)}
-                unknown = sorted(set(value) - names)
-                if unknown:
-                    raise ValueError(f"unknown key(s) {section}.{', '.join(unknown)}")
-                kwargs[section] = cls(**value)
-            elif isinstance(layout, str):
-                kwargs[layout] = _number(value, section)
-            else:
-                for key, attr in layout.items():
-                    v = value[key]
-                    kwargs[attr] = v if isinstance(v, str) else _number(v, f"{section}.{key}")
-        return MonitorConfig(**kwargs)
-    except (ValueError, TypeError) as exc:
-        raise ValueError(f"{source}: {exc}") from None
+        return _section(MonitorConfig, defaults, user, "")
+    except ValueError as exc:
+        raise ConfigError(f"{source}: {exc}") from None

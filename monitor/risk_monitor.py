@@ -7,10 +7,17 @@ Per frame (:meth:`RiskMonitor.step`):
 3. alignment of S to P: IoU~ and RDD~ (:func:`monitor.alignment.align`);
 4. risk = FIS(IoU~, RDD~) (:mod:`fuzzcore`).
 
-``step`` never raises for a bad frame: a depth map of the wrong shape or mostly invalid,
-detections with NaN or of the wrong shape, give a report with status ``invalid-input``, the
-reason, and the configured fail-safe risk (1.0 by default). A frame whose depth view finds
-nothing in range gives status ``no-objects`` and the configured ``no_objects`` risk.
+``step`` validates the frame once, where it enters, and never raises for a bad frame: a
+depth map that is not a real floating (H, W) array (masked arrays included) or is mostly
+invalid, detections that are not finite real (n, 7) boxes of sane size and place, scores
+outside [0, 1], give a report with status ``invalid-input``, the reason, and the configured
+fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
+one of them raises instead of hiding in a report. A frame whose depth view finds nothing in
+range gives status ``no-objects`` and the configured ``risk.no_objects``.
+
+The constructor calls :meth:`RiskMonitor.warmup`, which runs a synthetic frame through
+every stage, so the first real frame costs what the others do. ``step`` may be called from
+several threads at once (the retrieval keeps one set of scratch buffers per thread).
 """
 from __future__ import annotations
 
@@ -20,16 +27,30 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import fuzzcore
+from monitor import alignment as alignment_stage
 from monitor.alignment import Alignment, align
+from monitor.config import MonitorConfig
+from monitor.depth import retrieval
+from monitor.depth.prior import check_prior
+from monitor.depth.retrieval import InvalidDepthError, Retriever, as_depth_map
+from monitor.geometry.arrays import finite_array
 from monitor.geometry.boxes3d import as_boxes3d
 from monitor.geometry.camera import Camera, project_boxes
-from monitor.config import MonitorConfig
-from monitor.depth.prior import check_prior
-from monitor.depth.retrieval import Retriever
 
+#: :attr:`RiskReport.status` of an assessed frame: the risk comes from the rule base.
 OK = "ok"
+#: Status of a frame whose depth view found no safety-critical object in range.
 NO_OBJECTS = "no-objects"
+#: Status of a frame the monitor could not assess: the risk is the fail-safe risk.
 INVALID_INPUT = "invalid-input"
+#: Every status a report can have (the one definition; everything else imports these).
+STATUSES = (OK, NO_OBJECTS, INVALID_INPUT)
+
+
+class InvalidFrameError(ValueError):
+    """A frame :meth:`RiskMonitor.step` cannot assess; ``step`` turns it into an
+    ``invalid-input`` report whose reason is the message (naming the input, the value and
+    what was expected). :meth:`RiskMonitor.check_frame` raises it."""
 
 _EMPTY = np.zeros((0, 5))
 
@@ -43,7 +64,8 @@ class RiskReport:
     risk : float
         In [0, 1]. For ``invalid-input`` the fail-safe risk, for ``no-objects`` the
         configured no-objects risk; never NaN.
-    status : {"ok", "no-objects", "invalid-input"}
+    status : str
+        One of :data:`STATUSES`: :data:`OK`, :data:`NO_OBJECTS`, :data:`INVALID_INPUT`.
     reason : str
         Why the frame is not ``ok`` ("" when it is).
     iou, rdd : float
@@ -97,10 +119,13 @@ class RiskMonitor:
         Defaults: :func:`monitor.config.load_config` with no file.
     explain : bool
         Record the rules that fired in each report (costs a few microseconds per frame).
+    warmup : bool
+        Call :meth:`warmup` before returning (default), so that the first frame does not
+        pay for compiling or loading kernels.
     """
 
     def __init__(self, fis: fuzzcore.FuzzySystem, prior: np.ndarray, camera: Camera,
-                 config: MonitorConfig | None = None, *, explain: bool = True):
+                 config: MonitorConfig | None = None, *, explain: bool = True, warmup: bool = True):
         if sorted(fis.input_names) != ["iou", "rdd"] or len(fis.outputs) != 1:
             raise ValueError(f"fis {fis.name!r} has inputs {list(fis.input_names)} and outputs "
                              f"{list(fis.output_names)}; the monitor needs inputs iou and rdd and one output")
@@ -109,35 +134,99 @@ class RiskMonitor:
             raise ValueError(f"fis output range [{lo}, {hi}] must lie within [0, 1] (a risk)")
         if not isinstance(camera, Camera):
             raise ValueError(f"camera is a {type(camera).__name__}, expected a monitor.geometry.camera.Camera")
+        if config is not None and not isinstance(config, MonitorConfig):
+            raise ValueError(f"config is a {type(config).__name__}, expected a MonitorConfig "
+                             "(monitor.config.load_config)")
         prior = check_prior(prior)
         if prior.shape != (camera.height, camera.width):
             raise ValueError(f"prior has shape {prior.shape}, the camera's image is "
                              f"({camera.height}, {camera.width})")
-        self.fis = fis.warmup()
+        self.fis = fis
         self.camera = camera
         self.config = config if config is not None else MonitorConfig()
         self.explain = explain
         self._retriever = Retriever(prior, self.config.retrieval)
         self._iou_first = fis.input_names[0] == "iou"
+        if warmup:
+            self.warmup()
 
-    def _invalid(self, reason: str, timings: dict, **parts) -> RiskReport:
-        return RiskReport(risk=self.config.fail_safe_risk, status=INVALID_INPUT, reason=reason,
-                          timings=timings, **parts)
+    def warmup(self) -> "RiskMonitor":
+        """Run one synthetic frame through every stage; returns ``self``.
+
+        Compiles (or loads from Numba's cache) every kernel of the retrieval, the
+        projection, the alignment and the rule base, and makes OpenCV and SciPy do their
+        first-call set-up, so that the first real :meth:`step` costs what the others do.
+        The frame: the road as the prior expects it (no foreground) with a near box at the
+        image centre, and one detection where that box is.
+        """
+        retrieval.warmup()
+        alignment_stage.warmup()
+        self.fis.warmup()
+        depth, detections = self._synthetic_frame()
+        self.step(depth, detections, np.ones(len(detections)))
+        self.fis.explain(*((0.5, 0.0) if self._iou_first else (0.0, 0.5)))
+        return self
+
+    def _synthetic_frame(self) -> tuple[np.ndarray, np.ndarray]:
+        height, width = self.camera.height, self.camera.width
+        prior = self._retriever.prior
+        with np.errstate(divide="ignore"):
+            depth = np.where(prior > 0, 1.0 / prior, 1e3).astype(np.float32)  # NaN prior stays NaN
+        near = min(5.0, 0.5 * self.config.max_range)
+        depth[height // 3: 2 * height // 3, width // 3: 2 * width // 3] = near
+        # a 1 m cube on the optical axis at the same distance, in the ego frame
+        centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
+        return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
+
+    def _invalid(self, reason: str, timings: dict) -> RiskReport:
+        return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
+                          timings=timings)
+
+    def check_frame(self, depth, detections, scores=None) -> tuple[np.ndarray, np.ndarray]:
+        """Validate one frame: the depth map as float32 (H, W), and the detections to
+        project (those scoring at least ``config.detections.min_score``) as (m, 7).
+
+        Raises
+        ------
+        InvalidFrameError
+            Naming the input (``depth``, ``detections[i, j]``, ``scores[i]``), the value and
+            what was expected. See :meth:`step` for the rules.
+        """
+        try:
+            return as_depth_map(depth, (self.camera.height, self.camera.width)), \
+                self._kept_detections(detections, scores)
+        except ValueError as exc:
+            raise InvalidFrameError(str(exc)) from None
 
     def project(self, detections, scores=None) -> np.ndarray:
         """P: detections (n, 7) ``x, y, z, w, l, h, yaw`` in the ego frame -> (m, 5) image boxes.
 
-        Detections scoring below ``config.min_score`` are dropped first (all are kept when
-        ``scores`` is None). Raises ValueError for malformed input.
+        Detections scoring below ``config.detections.min_score`` are dropped first (all are
+        kept when ``scores`` is None). Raises :class:`InvalidFrameError` for malformed input.
         """
+        try:
+            boxes = self._kept_detections(detections, scores)
+        except ValueError as exc:
+            raise InvalidFrameError(str(exc)) from None
+        return self._project(boxes)
+
+    def _kept_detections(self, detections, scores) -> np.ndarray:
+        """The valid (m, 7) detections scoring at least ``min_score``; ValueError otherwise."""
         boxes = as_boxes3d(detections, "detections")
-        if scores is not None:
-            scores = np.asarray(scores, dtype=np.float64)
-            if scores.shape != (boxes.shape[0],) or not np.all(np.isfinite(scores)):
-                raise ValueError(f"scores must be {boxes.shape[0]} finite numbers, one per detection; "
-                                 f"got shape {scores.shape}")
-            boxes = boxes[scores >= self.config.min_score]
-        P, _ = project_boxes(boxes, self.camera, self.config.distance)
+        if scores is None:
+            return boxes
+        n = boxes.shape[0]
+        scores = finite_array(scores, "scores", f"({n},): one score per detection", ndim=1)
+        if scores.shape != (n,):
+            raise ValueError(f"scores has shape {scores.shape}, expected ({n},): one score per detection")
+        outside = np.flatnonzero((scores < 0.0) | (scores > 1.0))
+        if outside.size:
+            i = int(outside[0])
+            raise ValueError(f"scores[{i}] = {float(scores[i])!r}, expected a score in [0, 1]")
+        return boxes[scores >= self.config.detections.min_score]
+
+    def _project(self, boxes: np.ndarray) -> np.ndarray:
+        P, _ = project_boxes(boxes, self.camera, self.config.detections.distance)
         return P
 
     def step(self, depth, detections, scores=None) -> RiskReport:
@@ -145,43 +234,41 @@ class RiskMonitor:
 
         Parameters
         ----------
-        depth : ndarray of shape (H, W)
-            Metric depth map, metres, floating point (worked on as float32); invalid pixels
-            are NaN, inf or <= 0.
+        depth : ndarray of shape (H, W), real floating point
+            Metric depth map, metres (worked on as float32); invalid pixels are NaN, inf
+            or <= 0. Masked arrays are refused (mark invalid pixels NaN).
         detections : array_like of shape (n, 7)
-            The AV's 3D detections in the ego frame: ``x, y, z, w, l, h, yaw``.
+            The AV's 3D detections in the ego frame: ``x, y, z, w, l, h, yaw``; finite real
+            numbers, sizes in (0, 1000] m, centre coordinates within 100 km
+            (:func:`monitor.geometry.boxes3d.as_boxes3d`). No detections is (0, 7).
         scores : array_like of shape (n,), optional
-            Detection scores; those below ``config.min_score`` are ignored.
+            Detection scores, real numbers in [0, 1]; those below
+            ``config.detections.min_score`` are ignored.
 
         Returns
         -------
         RiskReport
+            Status ``invalid-input`` (with the reason and the fail-safe risk) for a frame
+            that fails these rules or whose depth map is more than
+            ``config.retrieval.max_invalid_fraction`` invalid.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()
-        depth = np.asarray(depth)
-        if depth.shape != (self.camera.height, self.camera.width):
-            return self._invalid(f"depth has shape {depth.shape}, expected "
-                                 f"({self.camera.height}, {self.camera.width})", timings)
-        if depth.dtype.kind != "f":
-            return self._invalid(f"depth has dtype {depth.dtype}, expected floating-point metres", timings)
         try:
-            S = self._retriever(depth.astype(np.float32, copy=False))
-        except ValueError as exc:  # InvalidDepthError (mostly invalid) among them
+            depth, boxes = self.check_frame(depth, detections, scores)
+            S = self._retriever(depth)
+        except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
         timings["retrieval"] = t1 - t0
-        try:
-            P = self.project(detections, scores)
-        except ValueError as exc:
-            return self._invalid(str(exc), timings, S=S)
+        P = self._project(boxes)
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
-        alignment = align(S, P, self.config.alpha, self.config.beta)
+        alignment = align(S, P, self.config.alignment.alpha, self.config.alignment.beta)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if alignment.n_objects == 0:
-            return RiskReport(risk=self.config.no_objects_risk, status=NO_OBJECTS,
+            return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
                               reason=f"no safety-critical object within {self.config.max_range:g} m",
                               S=S, P=P, alignment=alignment, timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
@@ -193,7 +280,8 @@ class RiskMonitor:
             risk, fired = self.fis.infer(*args), []
         timings["inference"] = time.perf_counter() - t3
         if not np.isfinite(risk):
-            return self._invalid(f"the rule base gave {risk} for IoU~ = {iou}, RDD~ = {rdd}", timings,
-                                 S=S, P=P, alignment=alignment)
+            return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT,
+                              reason=f"the rule base gave {risk} for IoU~ = {iou}, RDD~ = {rdd}",
+                              S=S, P=P, alignment=alignment, timings=timings)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
                           alignment=alignment, fired=fired, timings=timings)

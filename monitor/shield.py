@@ -15,6 +15,7 @@ produces one; this guards other risk sources).
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 from monitor.config import ShieldConfig
@@ -34,25 +35,24 @@ class Shield:
 
     Parameters
     ----------
-    threshold : float in [0, 1]
-        Engage when the risk is above it.
-    release : float in [0, threshold], optional
-        Disengage when the risk is at or below it (default: ``threshold``).
-    hold_frames : int >= 0
-        Frames to stay engaged after the last frame above ``threshold``.
-    deceleration : float > 0
-        Requested deceleration while engaged, m/s^2.
+    config : ShieldConfig, optional
+        Threshold, release, hold and deceleration (default: the paper's plain 0.5
+        threshold); the ``shield`` section of :class:`monitor.config.MonitorConfig`.
+
+    Examples
+    --------
+    >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3))
+    >>> shield.update(0.7).engaged, shield.update(0.4).engaged, shield.update(0.2).engaged
+    (True, True, False)
     """
 
-    def __init__(self, threshold: float = 0.5, release: float | None = None, hold_frames: int = 0,
-                 deceleration: float = 3.0):
-        self.config = ShieldConfig(threshold, threshold if release is None else release, hold_frames,
-                                   deceleration)
+    def __init__(self, config: ShieldConfig = ShieldConfig()):
+        if not isinstance(config, ShieldConfig):
+            raise ValueError(f"config is a {type(config).__name__} ({config!r}), expected a "
+                             "ShieldConfig, e.g. Shield(ShieldConfig(threshold=0.5)) or "
+                             "Shield(load_config().shield)")
+        self.config = config
         self.reset()
-
-    @classmethod
-    def from_config(cls, config: ShieldConfig) -> "Shield":
-        return cls(config.threshold, config.release, config.hold_frames, config.deceleration)
 
     def reset(self) -> None:
         """Forget the history (a new drive)."""
@@ -60,7 +60,10 @@ class Shield:
         self._since_trigger = 0
 
     def update(self, risk: float) -> ShieldDecision:
-        """The decision for the next frame's risk."""
+        """The decision for the next frame's risk (a real number; NaN engages)."""
+        if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
+            raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
+        risk = float(risk)
         c = self.config
         if math.isnan(risk) or risk > c.threshold:
             self.engaged, self._since_trigger = True, 0

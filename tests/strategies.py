@@ -4,49 +4,9 @@ from __future__ import annotations
 from hypothesis import strategies as st
 
 from fuzzcore import FuzzySystem, Rule, Term, Variable
-
-INPUT_KINDS = ("trimf", "trapmf", "gaussmf", "gauss2mf", "gbellmf", "sigmf", "dsigmf", "psigmf",
-               "smf", "zmf", "pimf", "linsmf", "linzmf")
-PIECEWISE = ("trimf", "trapmf", "linsmf", "linzmf")
+from fuzzcore.testing import INPUT_KINDS, PIECEWISE, term_params, variables  # noqa: F401 (used by tests)
 
 _coord = st.floats(-1.0, 1.0, allow_nan=False, width=64)
-_width = st.floats(0.05, 1.0, allow_nan=False)
-
-
-@st.composite
-def term_params(draw, kind: str, lo: float = -1.0, hi: float = 1.0):
-    """Valid parameters of ``kind`` with features inside [lo, hi] (sorted draws, no filter)."""
-    span = hi - lo
-
-    def points(n):
-        return sorted(draw(st.lists(st.floats(lo, hi), min_size=n, max_size=n)))
-
-    if kind in ("trimf", "pimf", "trapmf", "smf", "zmf", "linsmf", "linzmf"):
-        n = {"trimf": 3, "trapmf": 4, "pimf": 4}.get(kind, 2)
-        return points(n)
-    if kind == "gaussmf":
-        return [draw(_width) * span, draw(st.floats(lo, hi))]
-    if kind == "gauss2mf":
-        c1, c2 = points(2)
-        return [draw(_width) * span, c1, draw(_width) * span, c2]
-    if kind == "gbellmf":
-        return [draw(_width) * span, draw(st.floats(0.5, 4.0)), draw(st.floats(lo, hi))]
-    slope = st.floats(-20.0, 20.0).map(lambda a: a / span)
-    if kind == "sigmf":
-        return [draw(slope), draw(st.floats(lo, hi))]
-    return [draw(slope), draw(st.floats(lo, hi)), draw(slope), draw(st.floats(lo, hi))]
-
-
-@st.composite
-def variables(draw, name: str, kinds=INPUT_KINDS, min_terms=1, max_terms=4):
-    lo = draw(st.floats(-2.0, 0.0))
-    hi = lo + draw(st.floats(0.5, 3.0))
-    n = draw(st.integers(min_terms, max_terms))
-    terms = []
-    for k in range(n):
-        kind = draw(st.sampled_from(kinds))
-        terms.append(Term(f"t{k}", kind, draw(term_params(kind, lo, hi))))
-    return Variable(name, (lo, hi), tuple(terms))
 
 
 @st.composite

@@ -50,6 +50,11 @@ class PatternSearch(Tuner):
     keep_order : bool
         Keep each variable's terms in their starting order, so "low" stays left of
         "medium" (:mod:`fuzzcore.tune.term_space`).
+    partition : bool
+        Keep each variable's piecewise-linear terms a readable partition of its range:
+        ordered, covering it, bounded overlap and width
+        (:mod:`fuzzcore.tune.term_space`). On by default: without it a search fits the data
+        with terms that read as nonsense and leave parts of the input box where no rule fires.
     require_firing : bool
         Never choose a candidate under which some training sample fires no rule
         (:mod:`fuzzcore.tune.base`).
@@ -92,12 +97,13 @@ class PatternSearch(Tuner):
 
     method = "patternsearch"
 
-    def __init__(self, system, *, variables=None, keep_order=True, require_firing=True, metric="rmse", n_folds=5,
-                 max_iter=1000, initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-5, stall_iter=20, complete_poll=False,
-                 validation_tol=0.1, validation_window=5, seed=None, callback=None):
+    def __init__(self, system, *, variables=None, keep_order=True, partition=True, require_firing=True,
+                 metric="rmse", n_folds=5, max_iter=1000, initial_mesh=1.0, mesh_tol=1e-6, f_tol=1e-5, stall_iter=20,
+                 complete_poll=False, validation_tol=0.1, validation_window=5, seed=None, callback=None):
         self.system = system
         self.variables = variables
         self.keep_order = keep_order
+        self.partition = partition
         self.require_firing = require_firing
         self.metric = metric
         self.n_folds = n_folds
@@ -118,12 +124,12 @@ class PatternSearch(Tuner):
         check_number("mesh_tol", self.mesh_tol, 0.0, low_open=True)
         check_number("f_tol", self.f_tol, 0.0)
         check_number("stall_iter", self.stall_iter, 1, integer=True)
-        for name in ("complete_poll", "keep_order"):
+        for name in ("complete_poll", "keep_order", "partition"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} = {getattr(self, name)!r}: expected True or False")
 
     def _space(self, system) -> TermSpace:
-        return TermSpace(system, self.variables, self.keep_order)
+        return TermSpace(system, self.variables, self.keep_order, self.partition)
 
     def _expected_evaluations(self):
         return None

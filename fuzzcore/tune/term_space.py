@@ -26,6 +26,26 @@ paper's tuned terms move but stay in order; without it a search may swap them). 
 starts outside its variable's range (MATLAB allows feet beyond the range) may stay
 anywhere between that start and the range. ``scale`` is what one unit of a tuner's step
 is worth: a pattern-search mesh of 0.01 moves a vertex by 1 % of its variable's range.
+
+With ``partition`` (the tuners' default; :class:`~fuzzcore.tune.patternsearch.PatternSearch`),
+the terms of every tuned variable whose terms are all piecewise linear (trimf, trapmf,
+linsmf, linzmf) also stay a readable partition of its range, in declared order. With a
+term's corners (left foot a, left shoulder b, right shoulder c, right foot d) and
+``h =`` :data:`COVER`:
+
+- covering the range: the first term is at least h at the range's low end
+  (``(1-h) a + h b <= lo``), the last at its high end (``(1-h) d + h c >= hi``), and
+  neighbours cross at h or above (``(1-h) a' + h b' <= (1-h) d + h c`` for a term and the
+  next), so some term is at least h everywhere and every rule grid covers the whole box;
+- bounded overlap: neighbours cross at :data:`SEPARATION` or below (the same inequality
+  the other way at that level: neither is nearly 1 where the other is), a term rises only
+  after the previous one's core begins (``a' >= b``)
+  and falls before the next one's core ends (``d <= c'``), and no point is in three
+  terms (``d <= a''`` for a term and the one after next);
+- bounded width: a term's support within the range is at most :data:`MAX_WIDTH` of it.
+
+All but the last are linear inequalities on the parameters, so they are an extreme
+barrier like the others: a candidate that breaks one is never scored.
 """
 from __future__ import annotations
 
@@ -64,6 +84,16 @@ CORNERS = {
 }
 
 
+#: the level neighbouring terms must cross at or above, and the edges be covered at (partition)
+COVER = 0.5
+#: the level neighbouring terms must cross at or below (partition: they stay distinguishable)
+SEPARATION = 0.75
+#: the largest support of a term within its variable's range, as a fraction of it (partition)
+MAX_WIDTH = 0.75
+#: kinds the partition constraints apply to (a variable with another kind keeps only its order)
+PARTITION_KINDS = frozenset({"trimf", "trapmf", "linsmf", "linzmf"})
+
+
 class TermSpace:
     """The membership-function parameters of a system's variables as one vector.
 
@@ -74,6 +104,9 @@ class TermSpace:
         Names of the variables whose terms are tuned; default every input and output.
     keep_order : bool
         Keep each variable's terms in the order they start in (module docstring).
+    partition : bool
+        Keep each variable's piecewise-linear terms a readable partition of its range
+        (module docstring); the starting terms must be one (``ValueError`` says why not).
 
     Attributes
     ----------
@@ -95,7 +128,8 @@ class TermSpace:
         Whether a candidate changes output terms (the output tables need recomputing).
     """
 
-    def __init__(self, system, variables: Sequence[str] | None = None, keep_order: bool = True):
+    def __init__(self, system, variables: Sequence[str] | None = None, keep_order: bool = True,
+                 partition: bool = False):
         all_vars = [("inputs", i, v) for i, v in enumerate(system.inputs)] + \
                    [("outputs", o, v) for o, v in enumerate(system.outputs)]
         known = [v.name for _, _, v in all_vars]
@@ -119,8 +153,11 @@ class TermSpace:
         terms = []  # (first, end, "inputs"/"outputs", variable index, term index k, ordered kind?)
         refresh = False
         flat = 0  # flat input-term index
+        partitioned = []  # (variable, [(first parameter index, kind, term name)]) of tuned variables
         for kind_of_var, index, var in all_vars:
             tuned = var.name in chosen
+            if tuned:
+                partitioned.append((var, []))
             previous = None  # (first parameter index, kind) of the previous term of this variable
             for k, term in enumerate(var.terms):
                 if kind_of_var == "inputs":
@@ -161,6 +198,7 @@ class TermSpace:
                                              f"parameter {j + 1} ({role}) is {value:g}; tuning keeps it > 0, "
                                              "so it must start > 0")
                 terms.append((first, len(names), kind_of_var, index, k, kind in ORDERED))
+                partitioned[-1][1].append((first, kind, term.name))
                 if keep_order and previous is not None and kind in ORDERED and previous[1] in ORDERED:
                     for a, b in zip(CORNERS[previous[1]], CORNERS[kind]):
                         if a is not None and b is not None:
@@ -193,9 +231,82 @@ class TermSpace:
         self._last = np.array([c[-1] for c in chains], dtype=np.int64)
         self._terms = terms
         self._term_of = np.repeat(np.arange(len(terms)), [end - first for first, end, *_ in terms])
+        self.partition = bool(partition)
+        self._linear, self._widths, self._texts = [], [], ([], [])  # see _partition_constraints
+        if partition:
+            for var, listed in partitioned:
+                if listed and all(kind in PARTITION_KINDS for _, kind, _ in listed):
+                    self._partition_constraints(var, listed)
+        n = len(names)
+        self._A = np.zeros((len(self._linear), n))  # partition: P @ A.T <= b
+        for row, (coefficients, _) in enumerate(self._linear):
+            for j, c in coefficients:
+                self._A[row, j] += c
+        self._b = np.array([b for _, b in self._linear], dtype=np.float64)
+        self._slack = 1e-12 * np.array([1.0 + abs(b) for b in self._b])
         self.f_positions = np.array(positions, dtype=np.int64)
         self.i_positions = np.empty(0, dtype=np.int64)
         self.refresh = refresh
+        if partition:
+            broken = self.broken_constraints(self.x0)
+            if broken:
+                raise ValueError("the starting terms are not a readable partition, which partition=True keeps: "
+                                 + "; ".join(broken) + " (start from terms that are, or pass partition=False)")
+
+    def _partition_constraints(self, var, listed) -> None:
+        """Add the partition constraints of one variable (module docstring) to the lists:
+        ``_linear`` ([(index, coefficient)], rhs) for ``sum c P[:, i] <= rhs``, ``_widths``
+        (left foot index or None, right foot index or None, lo, hi, limit), and ``_texts``
+        (the descriptions of the linear ones and of the widths, in order)."""
+        lo, hi = var.range
+        h = COVER
+        corners = [tuple(None if c is None else first + c for c in CORNERS[kind]) for first, kind, _ in listed]
+        label = [f"{var.name}.{name}" for _, _, name in listed]
+
+        def add(terms, rhs, text):
+            self._linear.append(([(i, c) for i, c in terms if i is not None], rhs))
+            self._texts[0].append(text)
+
+        a0, b0, _, _ = corners[0]
+        if a0 is not None:
+            add([(a0, 1 - h), (b0, h)], lo, f"{label[0]} is at least {h:g} at {var.name}'s low end {lo:g}")
+        _, _, c1, d1 = corners[-1]
+        if d1 is not None:
+            add([(d1, -(1 - h)), (c1, -h)], -hi, f"{label[-1]} is at least {h:g} at {var.name}'s high end {hi:g}")
+        for k in range(len(corners) - 1):
+            (a, b, c, d), (a2, b2, c2, _) = corners[k], corners[k + 1]
+            if d is not None and a2 is not None:
+                add([(a2, 1 - h), (b2, h), (d, -(1 - h)), (c, -h)], 0.0,
+                    f"{label[k]} and {label[k + 1]} cross at {h:g} or above")
+                g = SEPARATION
+                add([(d, 1 - g), (c, g), (a2, -(1 - g)), (b2, -g)], 0.0,
+                    f"{label[k]} and {label[k + 1]} cross at {g:g} or below")
+            if a2 is not None and b is not None:
+                add([(b, 1.0), (a2, -1.0)], 0.0, f"{label[k + 1]} rises only after {label[k]}'s core begins")
+            if d is not None and c2 is not None:
+                add([(d, 1.0), (c2, -1.0)], 0.0, f"{label[k]} falls before {label[k + 1]}'s core ends")
+            if k + 2 < len(corners) and d is not None and corners[k + 2][0] is not None:
+                add([(d, 1.0), (corners[k + 2][0], -1.0)], 0.0,
+                    f"{label[k]} ends before {label[k + 2]} begins (no point in three terms)")
+        for (a, _, _, d), text in zip(corners, label):
+            self._widths.append((a, d, lo, hi, MAX_WIDTH * (hi - lo)))
+        self._texts[1].extend([f"{text} is at most {MAX_WIDTH:g} of {var.name}'s range wide" for text in label])
+
+    def _partition_each(self, P: np.ndarray) -> np.ndarray:
+        """(n, n_constraints) bool: which partition constraints each row of ``P`` keeps."""
+        ok = [P @ self._A.T <= self._b + self._slack]
+        for a, d, lo, hi, limit in self._widths:
+            left = np.maximum(P[:, a], lo) if a is not None else np.full(P.shape[0], lo)
+            right = np.minimum(P[:, d], hi) if d is not None else np.full(P.shape[0], hi)
+            ok.append((right - left <= limit * (1 + 1e-12))[:, None])
+        return np.concatenate(ok, axis=1)
+
+    def broken_constraints(self, p: np.ndarray) -> list[str]:
+        """The partition constraints the parameter vector ``p`` (n_params,) breaks, in words."""
+        if not self.partition:
+            return []
+        each = self._partition_each(np.asarray(p, dtype=np.float64)[None])[0]
+        return [text for text, ok in zip(self._texts[0] + self._texts[1], each) if not ok]
 
     @property
     def n_params(self) -> int:
@@ -218,6 +329,8 @@ class TermSpace:
             ok &= np.where(self._strict, P > self.lower, P >= self.lower).all(axis=1)
             ok &= (P[:, self._left] <= P[:, self._right]).all(axis=1)
             ok &= (P[:, self._first] < P[:, self._last]).all(axis=1)
+            if self.partition:
+                ok &= self._partition_each(np.where(np.isfinite(P), P, 0.0)).all(axis=1)
         return ok
 
     def changes(self, base: np.ndarray, p: np.ndarray) -> list[tuple]:
@@ -264,7 +377,8 @@ class TermSpace:
         if p.shape != self.x0.shape:
             raise ValueError(f"parameter vector has shape {p.shape}, expected {self.x0.shape}")
         if not self.feasible(p[None])[0]:
-            raise ValueError("parameter vector violates the term constraints (order, range, positive widths)")
+            raise ValueError("parameter vector violates the term constraints (order, range, positive widths"
+                             + (", partition" if self.partition else "") + ")")
         values = iter(p.tolist())
         system = self.system
 

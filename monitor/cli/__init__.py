@@ -19,6 +19,9 @@ COMMANDS = {
     "prior": "monitor.cli.prior",
     "convert": "monitor.cli.convert",
     "tune": "monitor.cli.tune",
+    "bench": "monitor.cli.bench",
+    "check": "monitor.cli.check",
+    "plot": "monitor.cli.plot",
 }
 
 

@@ -6,7 +6,10 @@ on every frame, prints a per-condition summary and writes to the output folder:
 
 - ``frames.jsonl``: one monitor report per frame (with the shield's decision and the
   ground-truth target 1 - USC~);
-- ``report.md``: the summary table, the figures, and how the data were made;
+- ``report.md``: first the quality measures of the risk (:mod:`monitor.offline.measures`)
+  on the held-out half of the scenes (the other half gives the constant predictor's mean),
+  then the summary table, the figures, and how the data were made;
+- ``quality.png``: ROC curves for hazard frames and risk against target;
 - ``retrieval_stages.png`` (paper Fig. 2), ``fis.png`` (Fig. 4), ``frame_<condition>.png``
   (Fig. 5: the riskiest frame of each condition), ``risk_timeline.png``.
 """
@@ -24,6 +27,8 @@ import fuzzcore
 from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
 from monitor.config import load_config
 from monitor.offline.evaluation import observe, recall_table, rmse_table
+from monitor.offline.measures import frame_truth, quality_tables, training_mean
+from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, RiskMonitor
@@ -73,6 +78,39 @@ _COLUMNS = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("ok",
             ("recall_s", "rec S", "{:.2f}"), ("recall_p", "rec P", "{:.2f}"), ("ms_per_frame", "ms/frame", "{:.1f}")]
 
 
+_QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
+            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
+            ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
+            ("auprc", "AUPRC", "{:.2f}"), ("hit_rate", "hit", "{:.0%}"),
+            ("false_alarm_rate", "false al.", "{:.0%}"), ("fpr95", "FPR@95", "{:.0%}"),
+            ("recall", "S recall", "{:.2f}"), ("precision", "S precision", "{:.2f}")]
+
+
+def _quality(split: list, fis, name: str, config, out: Path) -> dict:
+    """The measures of :mod:`monitor.offline.measures` on the test scenes (all scenes when
+    there is no split), the constant predictor from the training scenes; writes quality.png."""
+    test = [ob for part, ob in split if part == "test"] or [ob for _, ob in split]
+    train = [ob for part, ob in split if part == "train"] if len(test) < len(split) else []
+    test_truth = [frame_truth(ob) for ob in test]
+    reference, note = training_mean([frame_truth(ob) for ob in train], test_truth)
+    threshold = config.shield.threshold
+    risk_rows, depth_rows, risks = quality_tables(test, test_truth, {name: fis}, reference, threshold,
+                                                  config.risk.fail_safe)
+    depth = {r["condition"]: r for r in depth_rows}
+    rows = [{**r, "recall": depth[r["condition"]]["recall"], "precision": depth[r["condition"]]["precision"]}
+            if r["predictor"] == name else r for r in risk_rows]
+    conditions = list(dict.fromkeys(ob.condition for ob in test))
+    save_quality_figure(out / "quality.png",
+                        {c: risks[name][[ob.condition == c for ob in test]] for c in conditions},
+                        {c: [t for t, ob in zip(test_truth, test) if ob.condition == c] for c in conditions},
+                        threshold, f"{name} on {len({ob.scene for ob in test})} held-out scenes")
+    title = (f"Quality of the risk on {len({ob.scene for ob in test})} held-out scenes ({len(test)} frames; "
+             f"constant predictor: {note}; hazard: a ground truth within {config.max_range:g} m that no "
+             f"detection covers with IoG > 0.5 and DR > 0.8; alarm: risk > {threshold})")
+    notes = sorted({f"{r['condition']}: {r['notes']}" for r in risk_rows if r["notes"]})
+    return {"title": title, "rows": rows, "notes": notes}
+
+
 def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     out = Path(args.out)
@@ -81,20 +119,21 @@ def run(args: argparse.Namespace) -> int:
     fis = fuzzcore.load(rules_path)
     config = load_config(args.config)
     bench = Benchmark(conditions=tuple(args.conditions), scenes_per_condition=args.scenes,
-                      n_frames=args.frames, prior_scenes=2, seed=args.seed)
+                      test_scenes=args.scenes // 2, n_frames=args.frames, prior_scenes=2, seed=args.seed)
     n_frames = len(bench.scenes()) * args.frames + bench.prior_scenes * args.frames
     bar = tqdm(total=n_frames, unit="frame", desc="demo", disable=None)
     prior = bench.prior(progress=bar.update)
     monitor = RiskMonitor(fis, prior, bench.camera, config)
 
-    rows, series, obs_by_condition, riskiest = [], [], {}, {}
+    rows, series, obs_by_condition, riskiest, split = [], [], {}, {}, []
     for scene in bench.scenes():
-        shield = Shield.from_config(config.shield)
+        shield = Shield(config.shield)
         times, risks, targets, statuses = [], [], [], []
         for frame in scene.frames:
             ob = observe(monitor, frame, scene.name, scene.condition)
             decision = shield.update(ob.report.risk)
             obs_by_condition.setdefault(scene.condition, []).append(ob)
+            split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None
             rows.append({"scene": scene.name, "condition": scene.condition, "frame": frame.index,
                          "time": frame.timestamp, **ob.report.to_dict(), "target": target,
@@ -125,25 +164,37 @@ def run(args: argparse.Namespace) -> int:
         figures[name] = save_frame_figure(shade(frame), report, out / name,
                                           f"{scene_name} frame {frame.index}")
 
+    quality = _quality(split, fis, rules_path.name, config, out)
     table = _summary(rows, obs_by_condition, fis)
     elapsed = time.perf_counter() - started
     print(SYNTHETIC_NOTE)
     print(f"rule base: {rules_path} ({fis.name}); shield threshold {config.shield.threshold}")
+    print(quality["title"])
+    print(format_table(quality["rows"], _QUALITY))
     print(format_table(table, _COLUMNS))
-    (out / "report.md").write_text(_report(table, rules_path, fis, bench, config, figures, elapsed),
+    (out / "report.md").write_text(_report(table, quality, rules_path, fis, bench, config, figures, elapsed),
                                    encoding="utf-8")
     print(f"{len(rows)} frames in {elapsed:.1f} s; reports and figures in {out}/")
     return 0
 
 
-def _report(table, rules_path, fis, bench, config, figures, elapsed) -> str:
+def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) -> str:
     lines = [
         "# fuzzrisk demo", "",
         f"> {SYNTHETIC_NOTE}", "",
+        "## Quality of the risk", "",
+        quality["title"] + ". r, rho: Pearson and Spearman correlation of the risk with the target 1 - USC~; "
+        "skill: 1 - RMSE / RMSE of the constant; hit / false al.: alarms on hazard / other frames; FPR@95: "
+        "false alarms at a 95 % hit rate; S recall / precision: the depth view against the ground truth "
+        "within range (IoG > 0.5 / intersection over S > 0.5, depths within a ratio of 0.8). Every frame "
+        "counts, with the risk the monitor reported. '-': undefined on these frames.", "",
+        format_table(quality["rows"], _QUALITY, markdown=True), "",
+        *[f"- {note}" for note in quality["notes"]], "",
+        "![quality.png](quality.png)", "",
         f"- Rule base: `{rules_path}` ({fis.name}, {len(fis.rules)} rules, {fis.defuzzifier}).",
         f"- Scenes: {bench.scenes_per_condition} per condition x {bench.n_frames} frames at 2 Hz, seed {bench.seed}; "
         f"prior from {bench.prior_scenes} separate nominal scenes.",
-        f"- Matching: IoU > {config.alpha}, |RDD| < {config.beta}; objects within {config.max_range:g} m; "
+        f"- Matching: IoU > {config.alignment.alpha}, |RDD| < {config.alignment.beta}; objects within {config.max_range:g} m; "
         f"shield threshold {config.shield.threshold}.",
         f"- Run time: {elapsed:.1f} s.", "",
         "## Per condition", "",

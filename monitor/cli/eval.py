@@ -1,6 +1,18 @@
-"""``fuzzrisk eval``: the paper's validation (Tables I-III) and the rule bases' RMSE.
+"""``fuzzrisk eval``: the monitor's quality measures, then the paper's validation (Tables I-III).
 
-On the synthetic benchmark by default (the report says so), or on scene folders:
+On the synthetic benchmark by default (the report says so), or on scene folders. The
+headline (:mod:`monitor.offline.measures`), on the held-out test scenes, per condition and
+over all frames, for every rule base in the rules folder and the constant predictor (the
+training scenes' mean target):
+
+- r and Spearman's rho of the risk against 1 - USC~, RMSE and skill against the constant;
+- AUROC and AUPRC of the risk for hazard frames (a ground truth within range that no
+  detection covers: IoG > --hazard-iog and DR > --hazard-dr), hit and false-alarm rates at
+  the shield threshold, FPR at 95 % TPR;
+- the depth view's recall and precision of the ground truth within range, the share of
+  frames per status; a figure (``quality.png``): ROC curves and risk against target.
+
+Below them, the paper's tables:
 
 - Table I: Pearson r between the features measured against the depth view S and against
   the ground truth G, for (alpha, beta) = (0.5, 0.1) and (0.3, 0.2);
@@ -22,11 +34,23 @@ from monitor.cli.scenes import add_scene_arguments, count_frames, select_scenes
 from monitor.config import load_config
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
                                 observe_scenes, recall_table, rmse_table)
+from monitor.offline.measures import HazardCriterion, frame_truth, quality_tables, training_mean
+from monitor.report.quality_figure import save_quality_figure
 from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
 
-HELP = "the paper's validation tables and each rule base's RMSE, on synthetic or recorded scenes"
+HELP = "the monitor's quality measures and the paper's validation tables, on synthetic or recorded scenes"
+
+QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
+           ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
+           ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
+           ("auprc", "AUPRC", "{:.2f}"), ("hit_rate", "hit", "{:.0%}"), ("false_alarm_rate", "false al.", "{:.0%}"),
+           ("fpr95", "FPR@95", "{:.0%}")]
+DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gts", "GTs", "{}"),
+              ("recall", "recall", "{:.2f}"), ("objects", "S", "{}"), ("precision", "precision", "{:.2f}"),
+              ("ok", "ok", "{:.0%}"), ("no-objects", "no-objects", "{:.0%}"),
+              ("invalid-input", "invalid", "{:.0%}")]
 
 CORRELATION = [("alpha", "alpha", "{}"), ("beta", "beta", "{}"), ("frames", "frames", "{}"),
                ("iou_r", "r IoU~", "{:.2f}"), ("rdd_r", "r RDD~", "{:.2f}")]
@@ -42,6 +66,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-eval", help="output folder (default %(default)s)")
     parser.add_argument("--rules-dir", default=None, help="rule bases to compare (default: the shipped rules/)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
+    parser.add_argument("--hazard-iog", type=float, default=0.5,
+                        help="a detection covers a ground truth when IoG > this (default %(default)s)")
+    parser.add_argument("--hazard-dr", type=float, default=0.8,
+                        help="... and DR = min(1, d_G / d_P) > this (default %(default)s)")
     add_scene_arguments(parser, default_scenes=6, default_test=2)
 
 
@@ -52,7 +80,21 @@ def _by_condition(observations):
     return groups
 
 
+def _undefined(rows: list[dict]) -> str:
+    """Why some measures are '-': one line per condition and reason."""
+    reasons = {}
+    for row in rows:
+        for note in filter(None, row["notes"].split("; ")):
+            reasons.setdefault((row["condition"], note), []).append(row["predictor"])
+    lines = [f"- {condition}: {note} ({', '.join(who)})" for (condition, note), who in reasons.items()]
+    return "\n".join(["Undefined measures ('-'):"] + lines) if lines else "Every measure is defined."
+
+
 def run(args: argparse.Namespace) -> int:
+    try:
+        criterion = HazardCriterion(min_iog=args.hazard_iog, min_dr=args.hazard_dr)
+    except ValueError as exc:
+        raise ValueError(f"--hazard-iog {args.hazard_iog} / --hazard-dr {args.hazard_dr}: {exc}") from None
     bar = tqdm(total=count_frames(args, None), unit="frame", desc="eval", disable=None)
     selection = select_scenes(args, None, progress=bar.update)
     config = load_config(args.config)
@@ -66,34 +108,64 @@ def run(args: argparse.Namespace) -> int:
     if not systems:
         raise ValueError(f"no rule bases (.yaml, .fis) in {folder}")
 
+    test = [ob for ob in observations if ob.scene in test_names]
+    train_truth = [frame_truth(ob, criterion) for ob in observations if ob.scene not in test_names]
+    test_truth = [frame_truth(ob, criterion) for ob in test]
+    reference, reference_note = training_mean(train_truth, test_truth)
+    threshold = config.shield.threshold
+    quality, depth_view, risks = quality_tables(test, test_truth, systems, reference, threshold,
+                                                config.risk.fail_safe)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    shipped = shipped_rules().name if shipped_rules().name in risks else next(iter(systems))
+    by_condition = _by_condition(test)
+    figure = save_quality_figure(
+        out / "quality.png", {c: risks[shipped][[ob.condition == c for ob in test]] for c in by_condition},
+        {c: [t for t, ob in zip(test_truth, test) if ob.condition == c] for c in by_condition}, threshold,
+        f"{shipped} on {len(test_names)} held-out scenes")
+
     groups = _by_condition(observations)
     tables = {
+        "quality": quality, "depth_view": depth_view,
+        "quality_settings": {"reference": reference, "reference_note": reference_note,
+                             "threshold": threshold, "hazard_iog": criterion.min_iog,
+                             "hazard_dr": criterion.min_dr, "test_scenes": sorted(test_names)},
         "correlation": correlation_table(observations),
         "recall": [{"condition": c, "setting": f"({a}, {b})", **recall_table(obs, a, b)}
                    for c, obs in groups.items() for a, b in PAPER_THRESHOLDS],
-        "analysis": [], "rmse": rmse_table([ob for ob in observations if ob.scene in test_names], systems),
+        "analysis": [], "rmse": rmse_table(test, systems),
     }
     for condition, obs in groups.items():
-        counts = detection_analysis(obs, config.alpha, config.beta)
+        counts = detection_analysis(obs, config.alignment.alpha, config.alignment.beta)
         tables["analysis"].append({
             "condition": condition, "scenes": len({ob.scene for ob in obs}),
             "gts": counts["tps"] + counts["fns"],
             "approved": f"{counts['approved_tps']} / {counts['tps']}",
             "identified": f"{counts['identified_fns']} / {counts['fns']}", **counts})
     sections = [
+        (f"Quality of the risk on the {len(test_names)} held-out test scenes (hazard: a ground truth within "
+         f"{config.max_range:g} m no detection covers with IoG > {criterion.min_iog} and DR > {criterion.min_dr}; "
+         f"alarm: risk > {threshold}; constant: {reference_note})", quality, QUALITY),
+        (f"The depth view on the held-out test scenes: recall and precision of the ground truth within range "
+         f"(IoG > {criterion.min_iog} resp. intersection over S > {criterion.min_iog}, depth ratio min / max > "
+         f"{criterion.min_dr}), share of frames per status", depth_view, DEPTH_VIEW),
         ("Table I: correlation of S-based and G-based features (all frames)", tables["correlation"], CORRELATION),
         ("Table II: recall of the ground truth by S and by P", tables["recall"], RECALL),
-        (f"Table III: the depth view over the detector's TPs and FNs (alpha {config.alpha}, beta {config.beta})",
+        (f"Table III: the depth view over the detector's TPs and FNs (alpha {config.alignment.alpha}, beta {config.alignment.beta})",
          tables["analysis"], ANALYSIS),
         (f"Rule bases against 1 - USC~ on the {len(test_names)} held-out test scenes", tables["rmse"], RMSE),
     ]
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     print(selection.note)
     lines = ["# fuzzrisk evaluation", "", f"> {selection.note}", ""]
     for title, rows, columns in sections:
         print(f"\n{title}\n{format_table(rows, columns)}")
         lines += [f"## {title}", "", format_table(rows, columns, markdown=True), ""]
+        if columns is QUALITY:
+            notes = _undefined(rows)
+            print(notes)
+            lines += [notes, ""]
+        if columns is DEPTH_VIEW:
+            lines += [f"![ROC and risk against target]({figure.name})", ""]
     (out / "report.md").write_text("\n".join(lines), encoding="utf-8")
     (out / "tables.json").write_text(json.dumps({"note": selection.note, **tables}, indent=1), encoding="utf-8")
     print(f"\nreport: {out / 'report.md'}")

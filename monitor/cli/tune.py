@@ -52,6 +52,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                     help="variables whose terms are tuned (default: all inputs and outputs)")
     ps.add_argument("--free-order", action="store_true",
                     help="let terms pass each other (default: each variable's terms keep their order)")
+    ps.add_argument("--free-partition", action="store_true",
+                    help="let terms leave a readable partition: gaps, heavy overlap, any width (default: each "
+                         "variable's terms stay ordered, cover its range, overlap and width bounded)")
     pso = parser.add_argument_group("particle swarm (pso, joint)")
     pso.add_argument("--swarm-size", type=int, default=100, help="particles (default %(default)s)")
     pso.add_argument("--swarm-iter", type=int, default=20, help="iterations (default %(default)s)")
@@ -60,10 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _command(args: argparse.Namespace) -> str:
     """The command line, normalised (every option that applies, at its value)."""
-    parts = ["fuzzrisk tune", f"--features {args.features}", f"--method {args.method}", f"--rules {args.rules}",
-             f"-o {args.output}"]
+    parts = ["fuzzrisk tune", f"--features {_recorded(args.features)}", f"--method {args.method}",
+             f"--rules {_recorded(args.rules)}", f"-o {_recorded(args.output)}"]
     if args.test:
-        parts.append(f"--test {args.test}")
+        parts.append(f"--test {_recorded(args.test)}")
     parts += [f"--seed {args.seed}", f"--metric {args.metric}"]
     if args.method != "pso":
         parts += [f"--folds {args.folds}", f"--max-iter {args.max_iter}"]
@@ -71,11 +74,23 @@ def _command(args: argparse.Namespace) -> str:
             parts.append("--variables " + " ".join(args.variables))
         if args.free_order:
             parts.append("--free-order")
+        if args.free_partition:
+            parts.append("--free-partition")
     if args.method != "patternsearch":
         parts += [f"--swarm-size {args.swarm_size}", f"--swarm-iter {args.swarm_iter}"]
         if args.allow_off:
             parts.append("--allow-off")
     return " ".join(parts)
+
+
+def _recorded(path: str) -> str:
+    """``path`` as recorded in the metadata: relative to the current folder when inside it
+    (a rule file must not carry this machine's absolute paths)."""
+    resolved = Path(path).resolve()
+    try:
+        return resolved.relative_to(Path.cwd().resolve()).as_posix()
+    except ValueError:
+        return path
 
 
 def _sha256(path: str) -> str:
@@ -116,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
         bar.set_postfix(shown, refresh=False)
 
     ps_options = {"n_folds": args.folds, "max_iter": args.max_iter, "variables": args.variables,
-                  "keep_order": not args.free_order}
+                  "keep_order": not args.free_order, "partition": not args.free_partition}
     pso_options = {"swarm_size": args.swarm_size, "max_iter": args.swarm_iter, "allow_off": args.allow_off}
     common = {"metric": args.metric, "seed": args.seed, "callback": progress}
     if args.method == "patternsearch":
@@ -134,11 +149,11 @@ def run(args: argparse.Namespace) -> int:
     result = tuner.result_
 
     tuning = dict(tuner.system_.metadata["tuning"])
-    tuning["data"] = {**tuning["data"], "file": args.features, "sha256": _sha256(args.features),
+    tuning["data"] = {**tuning["data"], "file": _recorded(args.features), "sha256": _sha256(args.features),
                       "skipped_no_target": train.n_no_target, "skipped_no_features": train.n_no_features}
     if test is not None:
         initial_test, final_test = _score(system, test, args.metric), _score(tuner.system_, test, args.metric)
-        tuning["test"] = {"file": args.test, "sha256": _sha256(args.test), "n_samples": len(test),
+        tuning["test"] = {"file": _recorded(args.test), "sha256": _sha256(args.test), "n_samples": len(test),
                           "initial": initial_test, "final": final_test}
     tuning["command"] = _command(args)
     tuned = dataclasses.replace(tuner.system_, name=Path(args.output).stem,
@@ -154,4 +169,6 @@ def run(args: argparse.Namespace) -> int:
     if test is not None:
         print(f"  test {args.metric}: {initial_test:.5f} (start) -> {final_test:.5f} (tuned)")
     print(f"written to {args.output}")
+    print(f"\nfuzzrisk check {args.output}:")
+    print(fuzzcore.verify(tuned))
     return 0

@@ -7,7 +7,8 @@ frames from one camera. 3D boxes are float64 ``(n, 7)`` rows ``x, y, z, w, l, h,
 in the ego frame (see :mod:`monitor.geometry.boxes3d`). Class names are numpy string arrays.
 
 The label map (int16, ``(H, W)``) says what each pixel of the true depth shows:
-:data:`LABEL_SKY`, :data:`LABEL_ROAD`, :data:`LABEL_MARKING`, :data:`LABEL_SIDEWALK`, or
+:data:`LABEL_SKY`, :data:`LABEL_ROAD`, :data:`LABEL_MARKING`, :data:`LABEL_SIDEWALK` (with the
+curbs), :data:`LABEL_STRUCTURE` (buildings, fences, poles, vegetation: not ground truth), or
 ``k + 1`` for ground-truth box ``k`` of the frame.
 On disk they are scene folders (:mod:`monitor.datasets.scene_folder`).
 """
@@ -26,6 +27,7 @@ LABEL_SKY = -1
 LABEL_ROAD = 0
 LABEL_MARKING = -2
 LABEL_SIDEWALK = -3
+LABEL_STRUCTURE = -4
 
 #: the per-frame maps: field name -> dtype on disk and in memory
 MAPS = {"depth_est": np.float32, "depth_true": np.float32, "labels": np.int16}

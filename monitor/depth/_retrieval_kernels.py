@@ -178,3 +178,47 @@ def rect_min_depth(depth, rects):
         if best < _INF:
             out[k] = best
     return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _known(p):
+    """``(p, 1)`` as float64 for a finite prior value, ``(0, 0)`` otherwise."""
+    known = abs(p) < _INF
+    return (np.float64(p) if known else 0.0), np.int32(known)
+
+
+@njit(cache=True, error_model="numpy")
+def block_means(prior, out):
+    """Mean of the finite values of each 2 x 2 block of ``prior``, NaN for a block without one.
+
+    ``prior`` is float32 (H, W); ``out`` is float32 (ceil(H / 2), ceil(W / 2)), the last row
+    and column of blocks being partial when H or W is odd. The sum runs in float64 in the
+    block's row-major order (top-left, top-right, bottom-left, bottom-right), then the mean
+    is rounded to float32 once. Rows are read contiguously and without branches on data,
+    as in :func:`foreground_pairs`.
+    """
+    height, width = prior.shape
+    n_cols = out.shape[1]
+    nan = np.float32(np.nan)
+    for bi in range(out.shape[0]):
+        top = prior[2 * bi]
+        bottom = prior[min(2 * bi + 1, height - 1)]
+        has_bottom = 2 * bi + 1 < height
+        for bj in range(width // 2):
+            v0, c0 = _known(top[2 * bj])
+            v1, c1 = _known(top[2 * bj + 1])
+            v2, c2 = _known(bottom[2 * bj])
+            v3, c3 = _known(bottom[2 * bj + 1])
+            if not has_bottom:
+                v2, c2, v3, c3 = 0.0, np.int32(0), 0.0, np.int32(0)
+            count = c0 + c1 + c2 + c3
+            mean = np.float32((((v0 + v1) + v2) + v3) / max(count, 1))
+            out[bi, bj] = mean if count > 0 else nan
+        if width % 2:
+            v0, c0 = _known(top[width - 1])
+            v2, c2 = _known(bottom[width - 1])
+            if not has_bottom:
+                v2, c2 = 0.0, np.int32(0)
+            count = c0 + c2
+            mean = np.float32((v0 + v2) / max(count, 1))
+            out[bi, n_cols - 1] = mean if count > 0 else nan

@@ -36,12 +36,16 @@ one over the full-resolution depth map, which also keeps each block's nearest de
 one over the blocks); the prior is averaged to blocks once per :class:`Retriever`; the
 blur and Canny run only on the bounding region of the non-zero foreground (with a margin
 that makes this exactly equal to running them on the whole image). Call
-:func:`warm_up` once before a real-time loop (the kernels are also cached on disk). OpenCV
+:func:`warmup` once before a real-time loop (the kernels are also cached on disk). OpenCV
 may run Canny on its own thread pool: set ``cv2.setNumThreads`` as the application needs.
+
+Threads: a :class:`Retriever` may be called from several threads at once; each thread gets
+its own scratch memory (allocated at its first call).
 """
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import cv2
@@ -228,8 +232,9 @@ class RetrievalStages:
 class Retriever:
     """The retrieval for one camera: a validated prior, the parameters and scratch memory.
 
-    Use one per camera in a frame loop (it reuses a float32 scratch buffer, so an instance
-    must not be shared between threads); :func:`retrieve` is the one-shot form.
+    Use one per camera in a frame loop: it validates the prior and averages it to blocks
+    once, and reuses its float32 scratch buffers from frame to frame (one set per thread,
+    so an instance may be shared between threads). :func:`retrieve` is the one-shot form.
 
     Parameters
     ----------
@@ -244,32 +249,43 @@ class Retriever:
             raise ValueError(f"params is a {type(params).__name__}, expected RetrievalParams")
         self.prior = check_prior(prior)
         self.params = params
-        f = params.downsample
-        height, width = self.prior.shape
-        self._values = np.empty((-(-height // f), -(-width // f)), dtype=np.float32)
-        if f == 2:
+        if params.downsample == 2:
             self._block_prior = _block_means(self.prior)
-            self._nearest = np.empty_like(self._values)  # smallest valid depth per block
+        self._local = threading.local()
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(H, W), the size of the depth maps this retriever takes."""
+        return self.prior.shape
 
     def __call__(self, depth: np.ndarray) -> np.ndarray:
         """The objects S of one depth map (see :func:`retrieve`)."""
-        return self._run(depth, keep_stages=False)
+        return self._run(as_depth_map(depth, self.prior.shape), keep_stages=False)
 
     def stages(self, depth: np.ndarray) -> RetrievalStages:
         """:meth:`__call__`, also returning the intermediate images."""
-        return self._run(depth, keep_stages=True)
+        return self._run(as_depth_map(depth, self.prior.shape), keep_stages=True)
+
+    def _scratch(self) -> tuple[np.ndarray, np.ndarray]:
+        """This thread's pass-1 buffers: block values and (at ``downsample = 2``) block minima."""
+        local = self._local
+        if not hasattr(local, "values"):
+            f = self.params.downsample
+            height, width = self.prior.shape
+            local.values = np.empty((-(-height // f), -(-width // f)), dtype=np.float32)
+            local.nearest = np.empty_like(local.values) if f == 2 else None
+        return local.values, local.nearest
 
     def _run(self, depth: np.ndarray, keep_stages: bool):
-        depth = self._check_depth(depth)
-        params, values = self.params, self._values
+        params = self.params
+        values, nearest = self._scratch()
         rows, cols = values.shape
         foreground = np.empty((rows, cols), dtype=np.uint8)
         invalid = np.zeros((rows, cols), dtype=np.uint8)
         row_any = np.empty(rows, dtype=np.uint8)
         col_any = np.empty(cols, dtype=np.uint8)
         if params.downsample == 2:
-            n_invalid = kernels.foreground_pairs(depth, self._block_prior, values, self._nearest)
-            nearest = self._nearest
+            n_invalid = kernels.foreground_pairs(depth, self._block_prior, values, nearest)
         else:
             n_invalid = kernels.foreground_pixels(depth, self.prior, values)
             nearest = depth
@@ -308,31 +324,64 @@ class Retriever:
             boxes=boxes,
         )
 
-    def _check_depth(self, depth: np.ndarray) -> np.ndarray:
-        if not isinstance(depth, np.ndarray) or depth.dtype != np.float32 or depth.ndim != 2:
-            raise ValueError(
-                f"depth: {type(depth).__name__} of shape {getattr(depth, 'shape', None)} and dtype "
-                f"{getattr(depth, 'dtype', None)}, expected a float32 (H, W) array in metres"
-            )
-        if depth.shape != self.prior.shape:
-            raise ValueError(
-                f"depth is {depth.shape[1]}x{depth.shape[0]} (W x H) but the prior is "
-                f"{self.prior.shape[1]}x{self.prior.shape[0]}; build the prior from frames of this size"
-            )
-        return np.ascontiguousarray(depth)
+
+def as_depth_map(depth, shape: tuple[int, int], name: str = "depth") -> np.ndarray:
+    """Validate a depth map and return it as C-ordered float32 (H, W) metres.
+
+    The one check of a depth map's form; its values are judged by the retrieval (invalid
+    pixels: NaN, inf or <= 0; too many of them raise :class:`InvalidDepthError`). On a
+    C-ordered float32 array of the right shape this costs a few microseconds (no copy).
+
+    Parameters
+    ----------
+    depth : ndarray of shape (H, W), real floating point
+        Metres. float64 (or float16) is converted to float32: values beyond float32's range
+        become inf, an invalid pixel.
+    shape : tuple of int
+        The expected (H, W).
+    name : str
+        The argument's name, for messages.
+
+    Raises
+    ------
+    ValueError
+        A masked array (its mask would be ignored: give invalid pixels as NaN instead),
+        a non-floating dtype (integers, bool, complex, strings, objects) or another shape.
+    """
+    if isinstance(depth, np.ma.MaskedArray):
+        raise ValueError(f"{name} is a masked array; its mask would be ignored: mark invalid "
+                         "pixels NaN in a plain float array instead")
+    if not isinstance(depth, np.ndarray):
+        try:
+            depth = np.asarray(depth)
+        except (ValueError, TypeError) as exc:  # ragged nested lists
+            raise ValueError(f"{name} is not an array of depths ({exc})") from None
+    if depth.dtype.kind != "f":
+        raise ValueError(f"{name} has dtype {depth.dtype}, expected real floating-point metres "
+                         "(float32 or float64)")
+    if depth.shape != tuple(shape):
+        raise ValueError(
+            f"{name} has shape {depth.shape} (H, W), expected {tuple(shape)}; "
+            "the prior and the camera fix the size"
+        )
+    if depth.dtype != np.float32:
+        with np.errstate(over="ignore"):
+            return np.ascontiguousarray(depth, dtype=np.float32)
+    return np.ascontiguousarray(depth)
 
 
 def retrieve(depth: np.ndarray, prior: np.ndarray,
              params: RetrievalParams = RetrievalParams()) -> np.ndarray:
     """The safety-critical objects S of one depth map.
 
-    One-shot form of :class:`Retriever` (which validates the prior once and reuses memory;
-    use it in a frame loop).
+    One-shot form of :class:`Retriever` (which validates the prior and averages it to
+    blocks once and reuses memory; use it in a frame loop). The one-shot form pays those
+    per call: about 0.5 ms more than a Retriever on a 1600 x 900 frame.
 
     Parameters
     ----------
-    depth : ndarray of shape (H, W), float32
-        Metric depth, metres; non-finite or <= 0 pixels are invalid.
+    depth : ndarray of shape (H, W), real floating point
+        Metric depth, metres; non-finite or <= 0 pixels are invalid (see :func:`as_depth_map`).
     prior : ndarray of shape (H, W), floating
         Mean inverse depth of training frames, 1/m (NaN where unknown), see
         :mod:`monitor.depth.prior`.
@@ -348,7 +397,7 @@ def retrieve(depth: np.ndarray, prior: np.ndarray,
     InvalidDepthError
         More than ``params.max_invalid_fraction`` of the pixels are invalid.
     ValueError
-        Wrong shapes or dtypes, or a prior with inf or negative values.
+        Wrong shapes or dtypes, a masked depth map, or a prior with inf or negative values.
     """
     return Retriever(prior, params)(depth)
 
@@ -405,15 +454,9 @@ def _block_means(prior: np.ndarray) -> np.ndarray:
     """Mean of the finite values of each 2 x 2 block (partial at odd edges), NaN if none;
     float32 (ceil(H / 2), ceil(W / 2))."""
     height, width = prior.shape
-    pad = ((0, height % 2), (0, width % 2))
-    finite = np.pad(np.isfinite(prior), pad)
-    values = np.pad(np.where(np.isfinite(prior), prior, 0.0).astype(np.float64), pad)
-    sums = values[0::2, 0::2] + values[0::2, 1::2] + values[1::2, 0::2] + values[1::2, 1::2]
-    counts = (finite[0::2, 0::2].astype(np.int64) + finite[0::2, 1::2]
-              + finite[1::2, 0::2] + finite[1::2, 1::2])
-    means = np.full(sums.shape, np.nan)
-    np.divide(sums, counts, out=means, where=counts > 0)
-    return means.astype(np.float32)
+    out = np.empty((-(-height // 2), -(-width // 2)), dtype=np.float32)
+    kernels.block_means(prior, out)
+    return out
 
 
 def _percentile_depth(depth: np.ndarray, rect: np.ndarray, q: float) -> float:
@@ -423,7 +466,7 @@ def _percentile_depth(depth: np.ndarray, rect: np.ndarray, q: float) -> float:
     return float(np.percentile(values, q)) if values.size else math.nan
 
 
-def warm_up() -> None:
+def warmup() -> None:
     """Compile (or load from the disk cache) every Numba kernel on a tiny frame."""
     depth = np.ones((3, 3), dtype=np.float32)
     prior = np.zeros((3, 3), dtype=np.float32)
@@ -434,3 +477,4 @@ def warm_up() -> None:
     kernels.foreground_pairs(depth, values.copy(), values, np.empty_like(values))
     kernels.foreground_u8(values, np.float32(1.0), image, flags, flags.copy(), image.copy(), True)
     kernels.rect_min_depth(depth, np.zeros((1, 4), dtype=np.int64))
+    kernels.block_means(prior, values)

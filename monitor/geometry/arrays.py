@@ -11,8 +11,8 @@ def finite_array(a, name: str, shape_text: str, ndim: int | None = None,
     Parameters
     ----------
     a : array_like
-        Real numbers (integers are converted); strings, booleans, complex and object
-        arrays are refused.
+        Real numbers (integers are converted); strings, booleans, complex, object and
+        masked arrays (whose mask would be ignored) are refused.
     name : str
         The argument's name, for messages.
     shape_text : str
@@ -22,7 +22,13 @@ def finite_array(a, name: str, shape_text: str, ndim: int | None = None,
     last : int, optional
         Required length of the last axis.
     """
-    arr = np.asarray(a)
+    if isinstance(a, np.ma.MaskedArray):
+        raise ValueError(f"{name} is a masked array; its mask would be ignored: give a plain "
+                         f"array of {shape_text}")
+    try:
+        arr = np.asarray(a)
+    except (ValueError, TypeError) as exc:  # ragged nested lists
+        raise ValueError(f"{name} is not an array of numbers ({exc}); expected {shape_text}") from None
     if arr.dtype.kind not in "iuf":
         raise ValueError(f"{name} has dtype {arr.dtype}, expected real numbers")
     arr = np.asarray(arr, dtype=np.float64, order="C")

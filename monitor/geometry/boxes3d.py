@@ -17,6 +17,12 @@ from monitor.geometry.poses import as_pose, yaw_from_quaternion
 #: Column names of a 3D box array, for messages.
 COLUMNS_3D = ("x", "y", "z", "w", "l", "h", "yaw")
 
+#: Largest |x|, |y|, |z| of a box centre, metres (100 km: nuScenes' global frames span a
+#: few km). Beyond it a box is a corrupt value, and the camera's clipping loses precision.
+MAX_COORDINATE_M = 1e5
+#: Largest box size w, l, h, metres: no road object is a kilometre long.
+MAX_SIZE_M = 1e3
+
 _MIN_UP = 0.9  # a frame change for upright boxes must keep z up: R[2, 2] > this
 
 
@@ -26,7 +32,8 @@ def as_boxes3d(a, name: str = "boxes3d") -> np.ndarray:
     Parameters
     ----------
     a : array_like of shape (n, 7)
-        Rows ``x, y, z, w, l, h, yaw`` (metres, radians); sizes must be > 0.
+        Rows ``x, y, z, w, l, h, yaw`` (metres, radians), finite real numbers; sizes in
+        (0, :data:`MAX_SIZE_M`], centre coordinates within :data:`MAX_COORDINATE_M`.
     name : str
         The argument's name, used in error messages.
 
@@ -41,6 +48,13 @@ def as_boxes3d(a, name: str = "boxes3d") -> np.ndarray:
         i, j = int(bad[0, 0]), int(bad[0, 1]) + 3
         raise ValueError(f"{name}[{i}, {j}] ({COLUMNS_3D[j]}) = {float(arr[i, j])!r}: "
                          f"box sizes must be > 0 metres")
+    for columns, limit, what in ((slice(0, 3), MAX_COORDINATE_M, "centre coordinates"),
+                                 (slice(3, 6), MAX_SIZE_M, "box sizes")):
+        bad = np.argwhere(np.abs(arr[:, columns]) > limit)
+        if bad.size:
+            i, j = int(bad[0, 0]), int(bad[0, 1]) + columns.start
+            raise ValueError(f"{name}[{i}, {j}] ({COLUMNS_3D[j]}) = {float(arr[i, j])!r}: "
+                             f"{what} must be within {limit:g} metres")
     return arr
 
 

@@ -2,5 +2,6 @@
 
 - :mod:`~monitor.offline.groundtruth`: USC~ and the training target 1 - USC~;
 - :mod:`~monitor.offline.evaluation`: the paper's Tables I-III and the quality measures;
-- :mod:`~monitor.offline.simulation`: the monitor and shield in a closed loop.
+- :mod:`~monitor.offline.simulation`: the monitor and shield in a closed loop;
+- :mod:`~monitor.offline.latency`: per-stage latency of the monitor (``fuzzrisk bench --monitor``).
 """

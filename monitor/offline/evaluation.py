@@ -38,7 +38,9 @@ class Observation:
     """One frame: where it comes from, the monitor's report, and the ground truth.
 
     ``G`` holds the ground-truth boxes that are visible (visibility > 0), projected like the
-    detections and within the range limit, rows ``cx, cy, w, h, d``.
+    detections and within the range limit, rows ``cx, cy, w, h, d``; ``P`` the detections the
+    ground truth was scored against (the report's, or for an invalid frame the detections
+    projected all the same).
     """
 
     scene: str
@@ -47,6 +49,7 @@ class Observation:
     timestamp: float
     report: RiskReport
     G: np.ndarray
+    P: np.ndarray
     truth: GroundTruthScore
 
     @property
@@ -59,7 +62,7 @@ def observe(monitor: RiskMonitor, frame: Frame, scene: str, condition: str) -> O
     """Run ``monitor`` on ``frame`` and measure the frame against its ground truth."""
     report = monitor.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
     visible = frame.gt_boxes3d[frame.gt_visibility > 0]
-    G, _ = project_boxes(visible, monitor.camera, monitor.config.distance)
+    G, _ = project_boxes(visible, monitor.camera, monitor.config.detections.distance)
     G = within_range(G, monitor.config.max_range)
     P = report.P
     if report.status == INVALID_INPUT:  # the depth failed: score the detections all the same
@@ -67,7 +70,7 @@ def observe(monitor: RiskMonitor, frame: Frame, scene: str, condition: str) -> O
             P = monitor.project(frame.det_boxes3d, frame.det_scores)
         except ValueError:  # the detections themselves are unusable: nothing was detected
             P = np.zeros((0, 5))
-    return Observation(scene, condition, frame.index, frame.timestamp, report, G,
+    return Observation(scene, condition, frame.index, frame.timestamp, report, G, P,
                        score(P, G, monitor.config.max_range))
 
 

@@ -126,7 +126,7 @@ def run_trial(scenario: Scenario, condition: str | Condition, seed: int, camera:
     cond = get_condition(condition)
     background = render_depth(camera, np.zeros((0, 7))).depth
     px_scale = camera.width / REFERENCE_WIDTH_PX
-    shield = Shield.from_config(monitor.config.shield) if monitor is not None else None
+    shield = Shield(monitor.config.shield) if monitor is not None else None
     classes = np.array([scenario.obstacle_class])
     n_steps = int(np.ceil(scenario.max_time / scenario.dt))
     streams = np.random.SeedSequence(seed).spawn(n_steps)

@@ -15,9 +15,12 @@ _FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
 
 
 @njit(cache=True, fastmath=_FASTMATH)
-def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silhouette,
-           depth32, visible):
+def render(a, b, c, origin, near, boxes, box_labels, n_structure, rects, sky, ground, depth,
+           labels, silhouette, depth32, visible, background32):
     """Ray-cast the ground plane z = 0 and oriented boxes into a z-buffer.
+
+    The first ``n_structure`` boxes are static structure (walls, poles, curbs, ...): the
+    z-buffer after them, ground and structure only, is the background.
 
     Parameters
     ----------
@@ -28,11 +31,15 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
     near : float
         Hits at t < near are clipped; a box the near plane cuts reads ``near`` there.
     boxes : ndarray of shape (n, 7), float64
-        ``x, y, z, w, l, h, yaw`` in the ego frame (l along the heading).
+        ``x, y, z, w, l, h, yaw`` in the ego frame (l along the heading), structure first.
+    box_labels : ndarray of shape (n,), int16
+        The label each box writes (structure: a code <= ground; actor k: k + 1).
+    n_structure : int
+        How many of the boxes are structure.
     rects : ndarray of shape (n, 4), int64
         Per box the pixels to test, half-open ``u0, u1, v0, v1`` (empty: skip the box).
     sky, ground : int
-        Labels of no hit and of the ground; box k is labelled k + 1.
+        Labels of no hit and of the ground.
     depth : ndarray of shape (H, W), float64, out
         Nearest hit's t (camera-frame depth, metres), inf for no hit.
     labels : ndarray of shape (H, W), int16, out
@@ -40,8 +47,10 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
         Per box the number of pixels whose ray hits it (occluded or not).
     depth32 : ndarray of shape (H, W), float32, out
         ``depth`` rounded to float32.
-    visible : ndarray of shape (n,), int64, out
-        Per box the number of pixels where it is the nearest hit.
+    visible : ndarray of shape (n - n_structure,), int64, out
+        Per actor the number of pixels where it is the nearest hit (label k + 1 -> k).
+    background32 : ndarray of shape (H, W), float32, out
+        The depth of the ground and the structure alone.
     """
     height, width = depth.shape
     oz = origin[2]
@@ -56,6 +65,8 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
                 depth[v, u] = np.inf
                 labels[v, u] = sky
     for k in range(boxes.shape[0]):
+        if k == n_structure:
+            _round(depth, background32)
         silhouette[k] = 0
         u0, u1, v0, v1 = rects[k, 0], rects[k, 1], rects[k, 2], rects[k, 3]
         if u0 >= u1 or v0 >= v1:
@@ -74,7 +85,7 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
         hx = 0.5 * boxes[k, 4]
         hy = 0.5 * boxes[k, 3]
         hz = 0.5 * boxes[k, 5]
-        label = k + 1
+        label = box_labels[k]
         count = 0
         for v in range(v0, v1):
             for u in range(u0, u1):
@@ -89,12 +100,22 @@ def render(a, b, c, origin, near, boxes, rects, sky, ground, depth, labels, silh
                     depth[v, u] = t
                     labels[v, u] = label
         silhouette[k] = count
+    if n_structure >= boxes.shape[0]:
+        _round(depth, background32)
     visible[:] = 0
     for v in range(height):
         for u in range(width):
             depth32[v, u] = depth[v, u]
             if labels[v, u] > ground:
                 visible[labels[v, u] - 1] += 1
+
+
+@njit(cache=True, fastmath=_FASTMATH)
+def _round(depth, out):
+    """``out = depth`` rounded to float32."""
+    for v in range(depth.shape[0]):
+        for u in range(depth.shape[1]):
+            out[v, u] = depth[v, u]
 
 
 @njit(cache=True, fastmath=_FASTMATH, inline="always")

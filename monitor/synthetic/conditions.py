@@ -15,8 +15,37 @@ and scale with the camera's width.
 
 Where the numbers come from
 ---------------------------
-They are not fitted to anything we can measure here; they are chosen so that the synthetic
-data shows the paper's qualitative findings:
+The detector's recall and the depth errors are calibrated to the statistics the paper
+measured on real data (nuScenes with PGD and ZoeDepth), never to the monitor's scores:
+Table III's share of the ground truth the detector recovers per condition (equal to Table
+II's recall of P where both give it) and Table II's recall of S through the paper's
+retrieval. Measured with the default benchmark (``python -m monitor.cli eval``, 6 scenes of
+20 frames per condition, seed 0; Tables II and III of its report), matching at
+(alpha, beta) = (0.3, 0.2) unless noted:
+
+==========  =======  =========  =======  =========  ==================  ==================
+condition   P paper  P here     S paper  S here     approved TPs paper  identified FNs p.
+==========  =======  =========  =======  =========  ==================  ==================
+nominal     0.48     0.47       0.37     0.17       0.75 (here 0.28)    0.30 (here 0.07)
+ (0.5,0.1)  0.41     0.40       0.23     0.11
+rare        0.45     0.46       (0.40)   0.18       0.68 (here 0.26)    0.42 (here 0.12)
+noise       0.21     0.21       0.24     0.13       0.58 (here 0.21)    0.47 (here 0.11)
+rain        0.40     0.39       (0.37)   0.19       0.65 (here 0.25)    0.41 (here 0.15)
+snow        0.23     0.22       0.28     0.14       0.36 (here 0.21)    0.35 (here 0.11)
+night       0.62     0.60       (0.17)   0.08       0.19 (here 0.10)    0.30 (here 0.04)
+==========  =======  =========  =======  =========  ==================  ==================
+
+S in brackets: Table II gives no S recall for the condition; the target is Table III's
+share of ground truth the depth view recovers (approved TPs + identified FNs over GTs)
+relative to nominal's, times nominal's 0.37. The depth side cannot reach the paper's
+level: with an *exact* depth map the paper's retrieval recovers only about 0.25 of the
+ground truth in this world (its external contours merge neighbouring objects, parked cars
+and the structure beside the road), so the depth errors are set to give the paper's
+*ratios* of S recall between conditions (paper: rare 1.07, noise 0.65, rain 1.0, snow 0.76,
+night 0.45 of nominal; here 1.06, 0.76, 1.12, 0.82, 0.47), and Table III's approved-TP
+and identified-FN shares are out of reach for the same reason (night still approves the fewest TPs). For
+the same reason S stays below P under noise and snow, where the paper has it above.
+Beyond the calibrated numbers, the tables follow the paper's qualitative findings:
 
 * Table II: nominally the 3D detector recalls more near objects than the depth pipeline,
   but under Gaussian noise and snow it falls below it (P: 0.48 -> 0.21 / 0.23, S: 0.37 ->
@@ -25,7 +54,7 @@ data shows the paper's qualitative findings:
 * Table III: at night the depth pipeline approves far fewer of the detector's true
   positives (148 / 795 against 881 / 1180 nominally): the depth network loses objects in
   the dark. So night blends many objects into their background in the depth estimate
-  (``fade_prob``), adds scale error and blur, and weakens the detector only a little.
+  (``fade_prob``), adds scale error and blur; the detector keeps (Table III: raises) its recall.
 * Rare objects: more animals, wheelchairs and debris in the scene, which the detector
   (trained on nuScenes' ten classes) mostly misses; see :data:`DETECTOR_CLASSES`.
 * Monocular depth networks (ZoeDepth) and detectors (PGD) have errors that grow with
@@ -270,9 +299,9 @@ _NOMINAL_DEPTH = DepthErrors(
     artifact_rate=0.2, artifact_px=(8.0, 40.0), artifact_factor=(0.4, 0.8),
 )
 _NOMINAL_DETECTOR = DetectorErrors(
-    recall_max=0.85, recall_half_m=45.0, recall_slope=2.5, occlusion_power=1.5,
+    recall_max=0.9, recall_half_m=45.0, recall_slope=2.5, occlusion_power=1.5,
     min_visible_px=60.0,
-    depth_bias=0.0, depth_rel0=0.03, depth_rel_per_m=0.003, lateral_rad=0.004,
+    depth_bias=0.0, depth_rel0=0.025, depth_rel_per_m=0.0025, lateral_rad=0.004,
     size_log_std=0.08, yaw_std=0.08, yaw_flip_prob=0.05, confusion_prob=0.05,
     fp_per_frame=0.5, tp_logit=1.5, score_per_m=0.04, fp_logit=-1.0, score_logit_std=0.8,
 )
@@ -290,32 +319,32 @@ CONDITIONS = {
     "noise": Condition(
         "noise", "Gaussian image noise: detector much weaker, depth somewhat noisier", 0.15,
         replace(_NOMINAL_DEPTH, scale_log_std=0.06, field_rel0=0.05, field_rel_per_m=0.003,
-                 grain_log_std=0.035, fade_prob=0.12, artifact_rate=1.0),
-        replace(_NOMINAL_DETECTOR, recall_max=0.5, recall_half_m=25.0, depth_rel0=0.06,
+                 grain_log_std=0.035, fade_prob=0.2, artifact_rate=1.5),
+        replace(_NOMINAL_DETECTOR, recall_max=0.54, recall_half_m=25.0, depth_rel0=0.06,
                  depth_rel_per_m=0.004, size_log_std=0.12, yaw_std=0.15, confusion_prob=0.12,
                  fp_per_frame=2.0, tp_logit=0.5),
     ),
     "rain": Condition(
         "rain", "rain: both a little weaker, streak artefacts in the depth", 0.15,
-        replace(_NOMINAL_DEPTH, field_rel0=0.04, field_rel_per_m=0.003, grain_log_std=0.03,
-                 edge_blur_px=3.5, fade_prob=0.1, artifact_rate=1.0),
+        replace(_NOMINAL_DEPTH, field_rel0=0.04, field_rel_per_m=0.003, grain_log_std=0.025,
+                 edge_blur_px=1.5, fade_prob=0.05, artifact_rate=0.3),
         replace(_NOMINAL_DETECTOR, recall_max=0.75, recall_half_m=35.0, depth_rel0=0.04,
                  depth_rel_per_m=0.0035, fp_per_frame=1.0, tp_logit=1.0),
     ),
     "snow": Condition(
         "snow", "snow: detector much weaker, depth moderately (flake artefacts)", 0.15,
         replace(_NOMINAL_DEPTH, field_rel0=0.04, field_rel_per_m=0.003, grain_log_std=0.04,
-                 edge_blur_px=3.0, fade_prob=0.12, artifact_rate=2.0, artifact_px=(5.0, 20.0)),
-        replace(_NOMINAL_DETECTOR, recall_max=0.5, recall_half_m=25.0, depth_rel0=0.06,
+                 edge_blur_px=3.0, fade_prob=0.3, artifact_rate=2.0, artifact_px=(5.0, 20.0)),
+        replace(_NOMINAL_DETECTOR, recall_max=0.48, recall_half_m=25.0, depth_rel0=0.06,
                  depth_rel_per_m=0.004, size_log_std=0.1, yaw_std=0.12, confusion_prob=0.1,
                  fp_per_frame=1.5, tp_logit=0.6),
     ),
     "night": Condition(
-        "night", "night: depth network loses dark objects, detector a little weaker", 0.15,
+        "night", "night: depth network loses dark objects, the detector keeps its recall", 0.15,
         replace(_NOMINAL_DEPTH, scale_log_std=0.08, field_rel0=0.06, field_rel_per_m=0.004,
                  grain_log_std=0.04, edge_blur_px=5.0, fade_prob=0.5, fade_min=0.6,
                  artifact_rate=0.3),
-        replace(_NOMINAL_DETECTOR, recall_max=0.8, recall_half_m=35.0, depth_rel0=0.04,
+        replace(_NOMINAL_DETECTOR, recall_max=1.0, recall_half_m=70.0, occlusion_power=0.5, depth_rel0=0.04,
                  depth_rel_per_m=0.0035, fp_per_frame=0.8, tp_logit=1.1),
     ),
 }

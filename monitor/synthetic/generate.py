@@ -2,8 +2,8 @@
 
 One scene is a :class:`~monitor.synthetic.scene.Layout` (road, ego speed, actors) seen at
 ``n_frames`` times ``0, dt, 2 dt, ...`` (nuScenes' key frames come at 2 Hz: ``dt = 0.5 s``).
-Per frame: the actors within reach are the ground truth, the ray cast gives the true depth
-and the label map, :func:`~monitor.synthetic.degrade.estimate_depth` the estimated depth
+Per frame: the actors within reach are the ground truth, the ray cast of them and of the
+street's static structure gives the true depth and the label map, :func:`~monitor.synthetic.degrade.estimate_depth` the estimated depth
 and :func:`~monitor.synthetic.degrade.detect` the detections, all under the condition's
 degradations.
 
@@ -82,15 +82,14 @@ def _frames(cond: Condition, seed: int, n_frames: int, frame_interval: float,
             camera: Camera) -> Iterator[Frame]:
     layout_seq, frames_seq = np.random.SeedSequence(seed).spawn(2)
     layout = make_layout(layout_seq, (n_frames - 1) * frame_interval, cond.rare_per_scene)
-    background = render_depth(camera, np.zeros((0, 7))).depth
     painter = GroundPainter(layout.road, *ground_points(camera))
     px_scale = camera.width / REFERENCE_WIDTH_PX
     for index, frame_seq in enumerate(frames_seq.spawn(n_frames)):
         depth_rng, detector_rng = (np.random.default_rng(s) for s in frame_seq.spawn(2))
         t = index * frame_interval
         boxes, classes, ids = layout.frame_boxes(t)
-        render = render_depth(camera, boxes)
-        depth_est = estimate_depth(render.depth, render.labels, background, cond.depth,
+        render = render_depth(camera, boxes, *layout.frame_structure(t))
+        depth_est = estimate_depth(render.depth, render.labels, render.background, cond.depth,
                                    depth_rng, px_scale)
         visibility = render.visibility
         detections = detect(camera, boxes, classes, visibility, render.visible_px,

@@ -1,8 +1,9 @@
 """True depth by ray casting a flat road and oriented 3D boxes.
 
 The scene is the ground plane ``z = 0`` of the ego frame (nuScenes' ego origin is on the
-ground) and a set of upright 3D boxes (rows ``x, y, z, w, l, h, yaw``, see
-:mod:`monitor.geometry.camera`). One ray per pixel centre (pixel ``(i, j)`` is the point
+ground), static structure (buildings, fences, poles, vegetation, curbs: upright boxes that
+are not ground truth) and the actors (upright 3D boxes); boxes are rows
+``x, y, z, w, l, h, yaw``, see :mod:`monitor.geometry.camera`. One ray per pixel centre (pixel ``(i, j)`` is the point
 ``(i + 0.5, j + 0.5)``, the camera module's convention) finds the nearest hit at or beyond
 the near plane. The depth is the hit's camera-frame z in metres, ``inf`` where the ray hits
 nothing (sky). A box the near plane cuts reads ``near`` where it blocks the view.
@@ -21,7 +22,7 @@ import numpy as np
 
 from monitor.geometry.boxes3d import as_boxes3d
 from monitor.geometry.camera import Camera, project_boxes
-from monitor.datasets.frames import LABEL_ROAD, LABEL_SKY
+from monitor.datasets.frames import LABEL_ROAD, LABEL_SKY, LABEL_STRUCTURE
 from monitor.synthetic import _raycast_kernels as _k
 
 #: most boxes an int16 label map can name (box k is k + 1)
@@ -38,23 +39,41 @@ class DepthRender:
         Camera-frame depth of the nearest hit, metres; ``inf`` for no hit.
     labels : ndarray of shape (H, W), int16
         :data:`~monitor.datasets.frames.LABEL_SKY` (no hit), :data:`~monitor.datasets.frames.LABEL_ROAD`
-        (ground) or ``k + 1`` for box ``k``.
+        (ground), a structure box's label, or ``k + 1`` for box ``k``.
     silhouette_px : ndarray of shape (n,), int64
         Per box, the pixels whose ray hits it, occluded or not.
     visible_px : ndarray of shape (n,), int64
         Per box, the pixels where it is the nearest hit.
+    background : ndarray of shape (H, W), float32
+        The depth of the ground and the structure without the boxes, metres.
     """
 
     depth: np.ndarray
     labels: np.ndarray
     silhouette_px: np.ndarray
     visible_px: np.ndarray
+    background: np.ndarray
 
     @property
     def visibility(self) -> np.ndarray:
         """(n,) float64 visible fraction of each box's silhouette, 0 where it has none."""
         return np.divide(self.visible_px, self.silhouette_px, out=np.zeros(self.visible_px.size),
                          where=self.silhouette_px > 0)
+
+
+def _checked_structure(structure, structure_labels) -> tuple[np.ndarray, np.ndarray]:
+    boxes = as_boxes3d(np.zeros((0, 7)) if structure is None else structure, "structure")
+    if structure_labels is None:
+        return boxes, np.full(boxes.shape[0], LABEL_STRUCTURE, dtype=np.int16)
+    codes = np.asarray(structure_labels)
+    if codes.shape != (boxes.shape[0],) or codes.dtype.kind not in "iu":
+        raise ValueError(f"structure_labels has shape {codes.shape} and dtype {codes.dtype}; expected "
+                         f"({boxes.shape[0]},) integers, one per structure box")
+    bad = codes[(codes >= LABEL_ROAD) | (codes == LABEL_SKY)]
+    if bad.size:
+        raise ValueError(f"structure_labels has {sorted(set(bad.tolist()))}; structure labels must be "
+                         f"negative codes other than LABEL_SKY ({LABEL_SKY}), e.g. LABEL_STRUCTURE")
+    return boxes, codes.astype(np.int16)
 
 
 def _checked(camera: Camera, boxes3d) -> np.ndarray:
@@ -100,40 +119,51 @@ def _pixel_rects(camera: Camera, boxes: np.ndarray) -> np.ndarray:
     return rects
 
 
-def render_depth(camera: Camera, boxes3d) -> DepthRender:
-    """Ray-cast the true depth of the ground and boxes.
+def render_depth(camera: Camera, boxes3d, structure=None, structure_labels=None) -> DepthRender:
+    """Ray-cast the true depth of the ground, the structure and the boxes.
 
     Parameters
     ----------
     camera : Camera
         Its centre must be above the ground (``cam_to_ego[2, 3] > 0``).
     boxes3d : array_like of shape (n, 7)
-        Rows ``x, y, z, w, l, h, yaw`` in the ego frame; at most :data:`MAX_BOXES`.
+        The actors: rows ``x, y, z, w, l, h, yaw`` in the ego frame; at most :data:`MAX_BOXES`.
+    structure : array_like of shape (m, 7), optional
+        Static structure, same rows: rendered like the boxes, labelled ``structure_labels``,
+        not counted in ``silhouette_px`` / ``visible_px``.
+    structure_labels : array_like of shape (m,), int, optional
+        Negative label codes (not LABEL_SKY); default :data:`~monitor.datasets.frames.LABEL_STRUCTURE`.
 
     Returns
     -------
     DepthRender
     """
     boxes = _checked(camera, boxes3d)
+    walls, codes = _checked_structure(structure, structure_labels)
+    everything = np.ascontiguousarray(np.concatenate([walls, boxes]))
+    box_labels = np.concatenate([codes, np.arange(1, boxes.shape[0] + 1)]).astype(np.int16)
     a, b, c = pixel_rays(camera)
     depth = np.empty((camera.height, camera.width), dtype=np.float64)
     labels = np.empty((camera.height, camera.width), dtype=np.int16)
     depth32 = np.empty((camera.height, camera.width), dtype=np.float32)
-    silhouette = np.zeros(boxes.shape[0], dtype=np.int64)
+    background = np.empty((camera.height, camera.width), dtype=np.float32)
+    silhouette = np.zeros(everything.shape[0], dtype=np.int64)
     visible = np.zeros(boxes.shape[0], dtype=np.int64)
-    _k.render(a, b, c, np.ascontiguousarray(camera.cam_to_ego[:3, 3]), camera.near,
-              np.ascontiguousarray(boxes), _pixel_rects(camera, boxes), LABEL_SKY, LABEL_ROAD,
-              depth, labels, silhouette, depth32, visible)
-    return DepthRender(depth32, labels, silhouette, visible)
+    _k.render(a, b, c, np.ascontiguousarray(camera.cam_to_ego[:3, 3]), camera.near, everything,
+              box_labels, walls.shape[0], _pixel_rects(camera, everything), LABEL_SKY, LABEL_ROAD,
+              depth, labels, silhouette, depth32, visible, background)
+    return DepthRender(depth32, labels, silhouette[walls.shape[0]:], visible, background)
 
 
-def render_depth_reference(camera: Camera, boxes3d) -> DepthRender:
+def render_depth_reference(camera: Camera, boxes3d, structure=None, structure_labels=None) -> DepthRender:
     """:func:`render_depth` in vectorised NumPy, every box against every pixel (slow).
 
     Same parameters and result. Rays are built here from ``K`` and ``cam_to_ego`` directly
     and boxes are intersected with the textbook slab method.
     """
     boxes = _checked(camera, boxes3d)
+    walls, codes = _checked_structure(structure, structure_labels)
+    n_walls = walls.shape[0]
     H, W = camera.height, camera.width
     j, i = np.mgrid[0:H, 0:W]
     pixels = np.stack([i + 0.5, j + 0.5, np.ones((H, W))], axis=-1).reshape(-1, 3)
@@ -146,7 +176,8 @@ def render_depth_reference(camera: Camera, boxes3d) -> DepthRender:
     depth = np.where(hit_ground, t_ground, np.inf)
     labels = np.where(hit_ground, LABEL_ROAD, LABEL_SKY).astype(np.int16)
     silhouette = np.zeros(boxes.shape[0], dtype=np.int64)
-    for k, (x, y, z, w, l, h, yaw) in enumerate(boxes):
+    background = depth
+    for k, (x, y, z, w, l, h, yaw) in enumerate(np.concatenate([walls, boxes])):
         to_box = np.array([[np.cos(yaw), np.sin(yaw), 0.0],
                            [-np.sin(yaw), np.cos(yaw), 0.0],
                            [0.0, 0.0, 1.0]])
@@ -165,15 +196,19 @@ def render_depth_reference(camera: Camera, boxes3d) -> DepthRender:
             if abs(o[axis]) > half[axis]:  # a parallel ray outside the slab misses
                 t_in = np.where(parallel, np.inf, t_in)
         hit = (t_in <= t_out) & (t_out >= camera.near)
-        silhouette[k] = np.count_nonzero(hit)
+        if k >= n_walls:
+            silhouette[k - n_walls] = np.count_nonzero(hit)
         t = np.maximum(t_in, camera.near)
         nearer = hit & (t < depth)
         depth = np.where(nearer, t, depth)
-        labels = np.where(nearer, k + 1, labels).astype(np.int16)
+        labels = np.where(nearer, codes[k] if k < n_walls else k - n_walls + 1, labels).astype(np.int16)
+        if k == n_walls - 1:
+            background = depth
     labels = labels.reshape(H, W)
     visible = np.array([np.count_nonzero(labels == k + 1) for k in range(boxes.shape[0])],
                        dtype=np.int64)
-    return DepthRender(depth.reshape(H, W).astype(np.float32), labels, silhouette, visible)
+    return DepthRender(depth.reshape(H, W).astype(np.float32), labels, silhouette, visible,
+                       background.reshape(H, W).astype(np.float32))
 
 
 def ground_points(camera: Camera) -> tuple[np.ndarray, np.ndarray]:

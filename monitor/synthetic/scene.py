@@ -7,6 +7,11 @@ nuScenes). Right-hand traffic: same-direction lanes are at ``y = 0, -3.5``, onco
 at ``y = 3.5, 7``. Right of the lanes runs a shoulder (a bike lane or a row of parked
 cars), then a sidewalk; left of the oncoming lanes another sidewalk.
 
+Static structure lines both sides, as on real streets (:class:`Structure`; not ground
+truth, never detected): a curb at each kerb (a low box), poles and trees on the sidewalk
+near the kerb, and beyond each sidewalk a frontage of buildings, fences and hedges with
+gaps between them.
+
 Actors (upright 3D boxes, sizes from nuScenes' class means) come in
 
 * *streams*: vehicles in each lane, parked cars, cyclists in the bike lane, two lines of
@@ -21,8 +26,8 @@ Actors (upright 3D boxes, sizes from nuScenes' class means) come in
 
 Each actor moves on a segment: ``p(t) = p_a + (p_b - p_a) * clip((t - t_a) / (t_b - t_a), 0, 1)``.
 A scene's layout depends only on its seed (``rare_per_scene`` adds rare actors from a
-separate stream of random numbers), so the same seed gives the same traffic in every
-condition.
+separate stream of random numbers, the structure comes from a third), so the same seed
+gives the same traffic and the same street in every condition.
 """
 from __future__ import annotations
 
@@ -30,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from monitor.datasets.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK
+from monitor.datasets.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_STRUCTURE
 
 LANE_WIDTH_M = 3.5
 SIDEWALK_WIDTH_M = 3.0
@@ -163,9 +168,42 @@ class Actors:
         return np.column_stack([xy, 0.5 * self.sizes[:, 2], self.sizes, self.yaws])
 
 
+#: structure kind -> label code in the label map (curbs belong to the sidewalk)
+STRUCTURE_LABELS = {"curb": LABEL_SIDEWALK, "building": LABEL_STRUCTURE, "fence": LABEL_STRUCTURE,
+                    "hedge": LABEL_STRUCTURE, "pole": LABEL_STRUCTURE, "trunk": LABEL_STRUCTURE,
+                    "crown": LABEL_STRUCTURE}
+CURB_HEIGHT_M, CURB_WIDTH_M = 0.15, 0.3
+#: poles and trees stand this far outward of the kerb (between the curb and the pedestrians)
+KERB_SETBACK_M = 0.45
+#: frontage beyond the sidewalk: (kind, probability, length range m)
+_FRONTAGE = (("building", 0.55, (8.0, 30.0)), ("fence", 0.2, (5.0, 25.0)),
+             ("hedge", 0.15, (3.0, 15.0)), ("gap", 0.1, (3.0, 15.0)))
+
+
+@dataclass(frozen=True, eq=False)
+class Structure:
+    """Static structure beside the road (world frame): rendered, never ground truth.
+
+    Attributes
+    ----------
+    kinds : ndarray of shape (m,), str
+        Keys of :data:`STRUCTURE_LABELS`.
+    boxes : ndarray of shape (m, 7), float64
+        ``x, y, z, w, l, h, yaw`` (l along the road).
+    """
+
+    kinds: np.ndarray
+    boxes: np.ndarray
+
+    @property
+    def labels(self) -> np.ndarray:
+        """(m,) int16 label codes (:data:`STRUCTURE_LABELS`)."""
+        return np.array([STRUCTURE_LABELS[k] for k in self.kinds.tolist()], dtype=np.int16)
+
+
 @dataclass(frozen=True, eq=False)
 class Layout:
-    """A scene before rendering: the road, the ego's speed and the actors.
+    """A scene before rendering: the road, the ego's speed, the actors and the structure.
 
     The instance id of actor ``k`` is ``k``.
     """
@@ -174,6 +212,7 @@ class Layout:
     ego_speed: float
     duration: float
     actors: Actors
+    structure: Structure
 
     def ego_x(self, t: float) -> float:
         """World x of the ego's origin at time ``t``, metres."""
@@ -192,6 +231,14 @@ class Layout:
         boxes[:, 0] -= self.ego_x(t)
         ids = np.flatnonzero(np.hypot(boxes[:, 0], boxes[:, 1]) <= SCENE_RADIUS_M)
         return boxes[ids], self.actors.classes[ids], ids.astype(np.int64)
+
+    def frame_structure(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """The structure that reaches within :data:`SCENE_RADIUS_M` along x of the ego at
+        time ``t``: ego-frame boxes (m, 7) and their label codes (m,) int16."""
+        boxes = self.structure.boxes.copy()
+        boxes[:, 0] -= self.ego_x(t)
+        keep = np.abs(boxes[:, 0]) - 0.5 * boxes[:, 4] <= SCENE_RADIUS_M
+        return boxes[keep], self.structure.labels[keep]
 
 
 class _Builder:
@@ -268,7 +315,7 @@ def make_layout(seed: int | np.random.SeedSequence, duration: float,
     """
     if not isinstance(seed, np.random.SeedSequence):
         seed = np.random.SeedSequence(seed)
-    traffic_seq, rare_seq = seed.spawn(2)
+    traffic_seq, rare_seq, structure_seq = seed.spawn(3)
     rng = np.random.default_rng(traffic_seq)
     road = Road(same_lanes=int(rng.integers(1, 3)), oncoming_lanes=int(rng.integers(1, 3)),
                 parking=bool(rng.random() < 0.5))
@@ -317,7 +364,65 @@ def make_layout(seed: int | np.random.SeedSequence, duration: float,
     for _ in range(rare.rng.poisson(rare_per_scene * duration / 10.0)):
         _add_rare(rare, road, ego_speed, ego_lane)
     build.rows += rare.rows
-    return Layout(road, ego_speed, duration, build.actors())
+    x_range = (min(0.0, ego_speed * duration) - SCENE_RADIUS_M - 10.0,
+               max(0.0, ego_speed * duration) + SCENE_RADIUS_M + 10.0)
+    structure = make_structure(np.random.default_rng(structure_seq), road, x_range)
+    return Layout(road, ego_speed, duration, build.actors(), structure)
+
+
+def make_structure(rng: np.random.Generator, road: Road, x_range: tuple[float, float]) -> Structure:
+    """Curbs, poles, trees and a frontage of buildings, fences and hedges on both sides.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    road : Road
+    x_range : (float, float)
+        World x the street must cover, metres.
+
+    Returns
+    -------
+    Structure
+    """
+    lo, hi = x_range
+    rows: list[tuple[str, tuple]] = []
+
+    def box(kind, x0, x1, y_inner, outward, width, height, z0=0.0):
+        """A box along x from x0 to x1 whose side nearest the road is at y_inner."""
+        y = y_inner + outward * 0.5 * width
+        rows.append((kind, (0.5 * (x0 + x1), y, z0 + 0.5 * height, width, x1 - x0, height, 0.0)))
+
+    for kerb, outward in ((road.right_kerb, -1.0), (road.left_kerb, 1.0)):
+        box("curb", lo, hi, kerb, outward, CURB_WIDTH_M, CURB_HEIGHT_M)
+        x = lo + rng.uniform(0.0, 20.0)  # poles and trees near the kerb
+        while x < hi:
+            y = kerb + outward * KERB_SETBACK_M
+            if rng.random() < 0.65:
+                size = rng.uniform(0.15, 0.3)
+                box("pole", x - 0.5 * size, x + 0.5 * size, y, outward, size, rng.uniform(4.0, 9.0))
+            else:
+                trunk_h, crown = rng.uniform(2.2, 3.0), rng.uniform(1.8, 2.6)
+                box("trunk", x - 0.15, x + 0.15, y, outward, 0.3, trunk_h)
+                box("crown", x - 0.5 * crown, x + 0.5 * crown, y + 0.15 * outward - 0.5 * crown * outward,
+                    outward, crown, rng.uniform(2.0, 3.5), z0=trunk_h)
+            x += rng.uniform(12.0, 40.0)
+        frontage = kerb + outward * SIDEWALK_WIDTH_M
+        kinds, weights, lengths = zip(*_FRONTAGE)
+        x = lo
+        while x < hi:
+            k = int(rng.choice(len(kinds), p=np.array(weights) / sum(weights)))
+            length = rng.uniform(*lengths[k])
+            if kinds[k] == "building":
+                box("building", x, x + length, frontage + outward * rng.uniform(0.0, 3.0), outward,
+                    12.0, rng.uniform(5.0, 18.0))
+            elif kinds[k] == "fence":
+                box("fence", x, x + length, frontage + outward * 0.1, outward, 0.1, rng.uniform(1.0, 2.0))
+            elif kinds[k] == "hedge":
+                box("hedge", x, x + length, frontage + outward * 0.1, outward, rng.uniform(0.6, 1.5),
+                    rng.uniform(0.8, 2.0))
+            x += length + rng.uniform(0.0, 6.0)
+    kinds = np.array([k for k, _ in rows], dtype=str)
+    return Structure(kinds, np.array([b for _, b in rows], dtype=np.float64).reshape(-1, 7))
 
 
 def _add_crosser(build: _Builder, road: Road, ego_speed: float, ego_lane: np.ndarray,

@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from monitor.datasets.frames import Frame, LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY
+from monitor.datasets.frames import (
+    Frame, LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY, LABEL_STRUCTURE,
+)
 
 #: RGB colour of each ground-truth class (unknown classes are grey)
 CLASS_COLOURS = {
@@ -19,7 +21,7 @@ CLASS_COLOURS = {
 }
 _OTHER = (150, 150, 150)
 _GROUND = {LABEL_ROAD: (85, 85, 90), LABEL_MARKING: (235, 235, 225),
-           LABEL_SIDEWALK: (160, 155, 145)}
+           LABEL_SIDEWALK: (160, 155, 145), LABEL_STRUCTURE: (150, 120, 100)}
 _SKY_TOP, _SKY_HORIZON = np.array([110, 160, 225.0]), np.array([215, 225, 235.0])
 _HAZE = np.array([200, 210, 220.0])
 _HAZE_M = 120.0  # distance of 1/e visibility

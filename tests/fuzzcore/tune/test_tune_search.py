@@ -48,7 +48,7 @@ def _perturbed(fis, variables, moves):
 def test_pattern_search_recovers_perturbed_terms(fis, truth_data, variables, moves):
     X, y = truth_data
     space, start = _perturbed(fis, variables, moves)
-    tuner = PatternSearch(start, variables=variables, n_folds=1, max_iter=300, seed=0).fit(X, y)
+    tuner = PatternSearch(start, variables=variables, partition=False, n_folds=1, max_iter=300, seed=0).fit(X, y)
     assert tuner.result_.initial_fun > 0.005
     assert tuner.result_.fun < 1e-4
     np.testing.assert_allclose(tuner.result_.x, space.x0, atol=0.01)
@@ -96,8 +96,11 @@ def test_tuners_keep_every_training_sample_firing(fis):
     rules = ParticleSwarm(fis, allow_off=True, seed=0).fit(X, y)
     for tuner in (strict, rules):
         assert firing_strengths(tuner.system_, X).max(axis=1).min() > 0
-    loose = PatternSearch(fis, n_folds=1, max_iter=150, seed=0, require_firing=False).fit(X, y)
+    loose = PatternSearch(fis, n_folds=1, max_iter=150, seed=0, require_firing=False, partition=False).fit(X, y)
     assert firing_strengths(loose.system_, X).max(axis=1).min() == 0  # it did hand samples to the fallback
+    # the partition constraints alone keep every point of the box firing too
+    covering = PatternSearch(fis, n_folds=1, max_iter=150, seed=0, require_firing=False).fit(X, y)
+    assert firing_strengths(covering.system_, X).max(axis=1).min() > 0
 
 
 def test_a_start_that_leaves_samples_unfired_is_refused(fis, truth_data):
@@ -106,8 +109,10 @@ def test_a_start_that_leaves_samples_unfired_is_refused(fis, truth_data):
     gap = space.x0.copy()
     gap[:4] = [0.0, 0.05, 0.1, 0.15]
     with pytest.raises(ValueError, match="for some sample no rule fires .require_firing is set."):
-        PatternSearch(space.to_system(gap), n_folds=1, max_iter=2).fit(X, y)
-    PatternSearch(space.to_system(gap), n_folds=1, max_iter=2, require_firing=False).fit(X, y)
+        PatternSearch(space.to_system(gap), n_folds=1, max_iter=2, partition=False).fit(X, y)
+    PatternSearch(space.to_system(gap), n_folds=1, max_iter=2, require_firing=False, partition=False).fit(X, y)
+    with pytest.raises(ValueError, match="iou.low and iou.medium cross at 0.5 or above"):
+        PatternSearch(space.to_system(gap), n_folds=1, max_iter=2, require_firing=False).fit(X, y)
 
 
 # --------------------------------------------------------------------------- cross-validation

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import dataclasses
+from concurrent.futures import ThreadPoolExecutor
 
 import cv2
 import numpy as np
@@ -20,7 +21,7 @@ from monitor.depth.retrieval import (
     Retriever,
     retrieve,
     retrieve_stages,
-    warm_up,
+    warmup,
 )
 
 # --- analytic scenes: a level pinhole camera over a flat road, fronto-parallel objects ------
@@ -330,14 +331,49 @@ def test_retriever_reuse_is_deterministic_and_stages_do_not_alias():
 
 def test_input_errors():
     depth, _ = _scene([])
-    with pytest.raises(ValueError, match=r"depth: ndarray of shape \(900, 1600\) and dtype float64"):
-        retrieve(depth.astype(np.float64), PRIOR)
-    with pytest.raises(ValueError, match=r"depth is 1600x899 \(W x H\) but the prior is 1600x900"):
+    with pytest.raises(ValueError, match=r"depth has shape \(899, 1600\) \(H, W\), expected \(900, 1600\)"):
         retrieve(depth[:-1], PRIOR)
+    for bad, message in [(depth.astype(np.int32), "dtype int32"), (depth.astype(np.complex64), "dtype complex64"),
+                         (depth > 1, "dtype bool"), (depth.astype(str), "dtype <U"),
+                         (np.ma.masked_invalid(depth), "masked array"), ([[1.0], [1.0, 2.0]], "not an array")]:
+        with pytest.raises(ValueError, match=message):
+            retrieve(bad, PRIOR)
     with pytest.raises(ValueError, match="inf or negative"):
         retrieve(depth, np.full_like(PRIOR, -1.0))
     with pytest.raises(ValueError, match="expected RetrievalParams"):
         Retriever(PRIOR, {"canny_low": 1})
+
+
+def test_float64_depth_is_worked_on_as_float32():
+    depth, _ = _scene(NEAR[:2])
+    expected = retrieve(depth, PRIOR)
+    assert len(expected) == 2
+    np.testing.assert_array_equal(retrieve(depth.astype(np.float64), PRIOR), expected)
+    np.testing.assert_array_equal(retrieve(np.asfortranarray(depth), PRIOR), expected)
+    # beyond float32's range is inf: an invalid pixel, not a number
+    huge = np.full(depth.shape, 1e300)
+    with pytest.raises(InvalidDepthError, match="100.0% invalid"):
+        retrieve(huge, PRIOR)
+
+
+@given(st.integers(0, 2**31 - 1), st.sampled_from([(37, 53), (36, 54), (1, 1), (2, 3), (3, 1)]))
+def test_block_means_kernel_against_a_slow_reference(seed, shape):
+    _, prior = _random_frame(seed, shape=shape, invalid_share=0.8)
+    out = np.empty((-(-shape[0] // 2), -(-shape[1] // 2)), np.float32)
+    kernels.block_means(prior, out)
+    np.testing.assert_array_equal(out, _block_prior(prior))
+
+
+def test_one_retriever_shared_by_threads_gives_the_single_threaded_boxes():
+    retriever = Retriever(PRIOR)
+    scenes = [_scene(NEAR[k:k + 2])[0] for k in range(len(NEAR) - 1)] + [_scene([])[0]]
+    expected = [retriever(d) for d in scenes]
+    assert sum(len(e) for e in expected) >= len(scenes) - 1  # most scenes hold objects
+    work = [k % len(scenes) for k in range(6 * len(scenes))]
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        got = list(pool.map(lambda k: retriever(scenes[k]), work))
+    for k, boxes in zip(work, got):
+        np.testing.assert_array_equal(boxes, expected[k])
 
 
 @pytest.mark.parametrize(
@@ -366,7 +402,7 @@ def test_params_are_frozen():
 
 
 def test_warm_up_runs():
-    warm_up()
+    warmup()
 
 
 def test_stage_figure_is_written(tmp_path):

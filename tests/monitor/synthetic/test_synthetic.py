@@ -8,7 +8,9 @@ from hypothesis import strategies as st
 
 from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.geometry.camera import Camera, project_boxes
-from monitor.datasets.frames import LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY
+from monitor.datasets.frames import (
+    LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY, LABEL_STRUCTURE,
+)
 from monitor.synthetic import CONDITIONS, generate_frames, generate_scene, get_condition, shade
 from monitor.synthetic.conditions import DETECTOR_CLASSES, DepthErrors, DetectorErrors
 from monitor.synthetic.degrade import (
@@ -110,14 +112,43 @@ def test_rendered_extent_matches_project_boxes(box):
     assert render.depth[render.labels == 1].min() >= d - 1e-4
 
 
-def _reference_equal(camera, boxes):
-    fast = render_depth(camera, boxes)
-    slow = render_depth_reference(camera, boxes)
+def _reference_equal(camera, boxes, structure=None, structure_labels=None):
+    fast = render_depth(camera, boxes, structure, structure_labels)
+    slow = render_depth_reference(camera, boxes, structure, structure_labels)
     np.testing.assert_array_equal(fast.labels, slow.labels)
     np.testing.assert_allclose(fast.depth, slow.depth, rtol=1e-6)
+    np.testing.assert_allclose(fast.background, slow.background, rtol=1e-6)
     np.testing.assert_array_equal(fast.silhouette_px, slow.silhouette_px)
     np.testing.assert_array_equal(fast.visible_px, slow.visible_px)
     return fast
+
+
+def test_structure_is_rendered_labelled_and_in_the_background_but_not_counted():
+    camera = small_front_camera(0.1)
+    car = np.array([[12.0, 0.0, 0.9, 2.0, 4.5, 1.8, 0.0]])
+    structure = np.array([
+        [20.0, -9.0, 6.0, 10.0, 30.0, 12.0, 0.0],   # a building facade on the right
+        [8.0, -5.0, 3.0, 0.2, 0.2, 6.0, 0.0],       # a pole on the right sidewalk
+        [20.0, 5.15, 0.075, 0.3, 60.0, 0.15, 0.0],  # the left curb
+        [30.0, 0.0, 0.9, 2.0, 4.5, 1.8, 0.0],       # a wall behind the car, same width
+    ])
+    codes = np.array([LABEL_STRUCTURE, LABEL_STRUCTURE, LABEL_SIDEWALK, LABEL_STRUCTURE])
+    render = _reference_equal(camera, car, structure, codes)
+    plain = render_depth(camera, car)
+    # the car is counted as before: structure behind it changes nothing of it
+    assert render.visible_px[0] == plain.visible_px[0] > 0
+    assert render.silhouette_px.shape == (1,)
+    assert {LABEL_STRUCTURE, LABEL_SIDEWALK, 1} <= set(np.unique(render.labels).tolist())
+    # the background is the depth without the car: the wall shows through where the car was
+    car_px = render.labels == 1
+    assert np.all(render.background[car_px] > render.depth[car_px])
+    np.testing.assert_array_equal(render.background[~car_px], render.depth[~car_px])
+    # without structure the background is the empty road
+    np.testing.assert_array_equal(plain.background, render_depth(camera, np.zeros((0, 7))).depth)
+    with pytest.raises(ValueError, match="structure_labels"):
+        render_depth(camera, car, structure, np.array([1, 0, -3, -4]))
+    with pytest.raises(ValueError, match="structure_labels"):
+        render_depth(camera, car, structure, np.array([-4, -4]))
 
 
 def test_renderer_equals_numpy_reference_with_occlusion_near_plane_and_camera_inside():
@@ -145,6 +176,9 @@ def test_renderer_equals_numpy_reference_with_occlusion_near_plane_and_camera_in
 def test_renderer_equals_numpy_reference_on_random_boxes(rows):
     boxes = np.array(rows, dtype=np.float64).reshape(-1, 7)
     _reference_equal(small_front_camera(0.04), boxes)
+    # the first half as structure, the rest as actors
+    half = len(boxes) // 2
+    _reference_equal(small_front_camera(0.04), boxes[half:], boxes[:half])
 
 
 def test_render_rejects_bad_input():
@@ -210,6 +244,40 @@ def test_layout_keeps_actors_off_the_ego_and_near_objects_in_most_frames():
     near_counts, far_counts = np.array(near_counts), np.array(far_counts)
     assert np.mean(near_counts >= 3) >= 0.8  # "several within 20 m in most frames"
     assert np.mean(far_counts >= 1) >= 0.8  # "some farther"
+
+
+def test_structure_lines_both_sides_of_the_road_and_stays_off_it():
+    for seed in range(8):
+        layout = make_layout(seed, 9.5, rare_per_scene=0.15)
+        road, st_ = layout.road, layout.structure
+        kinds = st_.kinds.tolist()
+        assert {"curb", "pole", "building"} <= set(kinds), seed
+        x, y, z, w, l, h, _ = st_.boxes.T
+        right, left = y < 0, y > 0
+        assert right.any() and left.any()
+        # nothing stands on the carriageway: every box lies beyond a kerb, except tree
+        # crowns, which may hang over the road edge but only above 2 m
+        inner = np.where(right, y + w / 2 - road.right_kerb, road.left_kerb - (y - w / 2))
+        crown = st_.kinds == "crown"
+        assert np.all(inner[~crown] <= 1e-9), seed
+        assert np.all(z[crown] - h[crown] / 2 >= 2.0) and np.all(inner[crown] <= 1.5)
+        # curbs are low and cover the whole stretch the ego sees
+        curb = st_.kinds == "curb"
+        np.testing.assert_allclose(h[curb], 0.15)
+        assert np.all(x[curb] - l[curb] / 2 <= -80.0) and np.all(x[curb] + l[curb] / 2 >= 80.0)
+        np.testing.assert_array_equal(st_.labels[curb], LABEL_SIDEWALK)
+        assert np.all(st_.labels[~curb] == LABEL_STRUCTURE)
+        # the structure does not depend on the rare rate (its own random numbers)
+        np.testing.assert_array_equal(make_layout(seed, 9.5, rare_per_scene=5.0).structure.boxes, st_.boxes)
+
+
+def test_every_condition_has_the_same_street_structure():
+    camera = small_front_camera(0.1)
+    frames = {c: next(generate_frames(c, 4, n_frames=1, camera=camera)) for c in CONDITIONS}
+    structure = frames["nominal"].labels == LABEL_STRUCTURE
+    assert np.count_nonzero(structure) > 0.05 * structure.size
+    for frame in frames.values():
+        np.testing.assert_array_equal(frame.labels == LABEL_STRUCTURE, structure)
 
 
 def test_layout_sizes_and_instance_ids():
@@ -501,8 +569,8 @@ def test_generated_frames_are_consistent():
     for frame in scene.frames:
         labels = frame.labels
         assert set(np.unique(labels[labels <= 0]).tolist()) <= {
-            LABEL_SKY, LABEL_ROAD, LABEL_MARKING, LABEL_SIDEWALK}
-        assert {LABEL_ROAD, LABEL_MARKING, LABEL_SIDEWALK} <= set(np.unique(labels).tolist())
+            LABEL_SKY, LABEL_ROAD, LABEL_MARKING, LABEL_SIDEWALK, LABEL_STRUCTURE}
+        assert {LABEL_ROAD, LABEL_MARKING, LABEL_SIDEWALK, LABEL_STRUCTURE} <= set(np.unique(labels).tolist())
         assert labels.max() <= frame.gt_ids.size
         np.testing.assert_array_equal(np.isinf(frame.depth_true), labels == LABEL_SKY)
         assert np.all(np.isfinite(frame.depth_est)) and np.all(frame.depth_est > 0)
