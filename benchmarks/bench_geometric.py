@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 from monitor.depth import _geometric_kernels as kernels
-from monitor.depth.geometric import GeometricRetriever, warm_up
+from monitor.depth.geometric import GeometricRetriever, warmup
 from monitor.depth.prior import build_prior
-from monitor.depth.retrieval import Retriever, warm_up as warm_up_paper
+from monitor.depth.retrieval import Retriever, warmup as warm_up_paper
 from monitor.geometry.boxes import iou
 from monitor.synthetic.generate import generate_frames
 
@@ -55,7 +55,7 @@ def frame():
     training = generate_frames("nominal", 1000, n_frames=10)
     prior = build_prior((str(f.index), f.depth_est) for f in training).mean()
     frame = list(generate_frames("nominal", 0, n_frames=4))[3]
-    warm_up()
+    warmup()
     warm_up_paper()
     return frame, prior
 

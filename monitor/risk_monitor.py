@@ -2,7 +2,9 @@
 
 Per frame (:meth:`RiskMonitor.step`):
 
-1. depth view: safety-critical objects S from the depth map (:mod:`monitor.depth.retrieval`);
+1. depth view: safety-critical objects S from the depth map, by the method the configuration
+   names (``retrieval.method``: the paper's :mod:`monitor.depth.retrieval` or the geometric
+   :mod:`monitor.depth.geometric`);
 2. detector view: the 3D detections projected into the image, P (:func:`monitor.geometry.camera.project_boxes`);
 3. alignment of S to P: IoU~ and RDD~ (:func:`monitor.alignment.align`);
 4. risk = FIS(IoU~, RDD~) (:mod:`fuzzcore`).
@@ -10,8 +12,9 @@ Per frame (:meth:`RiskMonitor.step`):
 ``step`` validates the frame once, where it enters, and never raises for a bad frame: a
 depth map that is not a real floating (H, W) array (masked arrays included) or is mostly
 invalid, detections that are not finite real (n, 7) boxes of sane size and place, scores
-outside [0, 1], give a report with status ``invalid-input``, the reason, and the configured
-fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
+outside [0, 1], or a frame the geometric view cannot see through
+(:class:`~monitor.depth.geometric.BlindViewError`), give a report with status
+``invalid-input``, the reason, and the configured fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
 one of them raises instead of hiding in a report. A frame whose depth view finds nothing in
 range gives status ``no-objects`` and the configured ``risk.no_objects``.
 
@@ -30,7 +33,8 @@ import fuzzcore
 from monitor import alignment as alignment_stage
 from monitor.alignment import Alignment, align
 from monitor.config import MonitorConfig
-from monitor.depth import retrieval
+from monitor.depth import geometric, retrieval
+from monitor.depth.geometric import BlindViewError, GeometricRetriever
 from monitor.depth.prior import check_prior
 from monitor.depth.retrieval import InvalidDepthError, Retriever, as_depth_map
 from monitor.geometry.arrays import finite_array
@@ -112,7 +116,8 @@ class RiskMonitor:
     fis : fuzzcore.FuzzySystem
         Two inputs named ``iou`` and ``rdd`` (any order) and one output in [0, 1].
     prior : ndarray of shape (H, W)
-        Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`).
+        Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`); the
+        paper's view uses it, the geometric one does not (it is still checked).
     camera : Camera
         The camera the depth maps and projections refer to; its size must match ``prior``.
     config : MonitorConfig, optional
@@ -145,7 +150,12 @@ class RiskMonitor:
         self.camera = camera
         self.config = config if config is not None else MonitorConfig()
         self.explain = explain
-        self._retriever = Retriever(prior, self.config.retrieval)
+        self._prior = prior
+        chosen = self.config.retrieval
+        if chosen.method == "geometric":
+            self._retriever = GeometricRetriever(camera, chosen.geometric)
+        else:
+            self._retriever = Retriever(prior, chosen.paper)
         self._iou_first = fis.input_names[0] == "iou"
         if warmup:
             self.warmup()
@@ -159,7 +169,7 @@ class RiskMonitor:
         The frame: the road as the prior expects it (no foreground) with a near box at the
         image centre, and one detection where that box is.
         """
-        retrieval.warmup()
+        (geometric if self.config.retrieval.method == "geometric" else retrieval).warmup()
         alignment_stage.warmup()
         self.fis.warmup()
         depth, detections = self._synthetic_frame()
@@ -169,7 +179,7 @@ class RiskMonitor:
 
     def _synthetic_frame(self) -> tuple[np.ndarray, np.ndarray]:
         height, width = self.camera.height, self.camera.width
-        prior = self._retriever.prior
+        prior = self._prior
         with np.errstate(divide="ignore"):
             depth = np.where(prior > 0, 1.0 / prior, 1e3).astype(np.float32)  # NaN prior stays NaN
         near = min(5.0, 0.5 * self.config.max_range)
@@ -249,15 +259,15 @@ class RiskMonitor:
         -------
         RiskReport
             Status ``invalid-input`` (with the reason and the fail-safe risk) for a frame
-            that fails these rules or whose depth map is more than
-            ``config.retrieval.max_invalid_fraction`` invalid.
+            that fails these rules, whose depth map is more invalid than the depth view's
+            ``max_invalid_fraction`` allows, or that the geometric view cannot see through.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
             S = self._retriever(depth)
-        except (InvalidFrameError, InvalidDepthError) as exc:
+        except (InvalidFrameError, InvalidDepthError, BlindViewError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
         timings["retrieval"] = t1 - t0

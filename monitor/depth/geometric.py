@@ -54,12 +54,13 @@ close ahead is an object at that depth, not an error.
 Speed: the one pass over all pixels is :func:`~monitor.depth._geometric_kernels.block_points`;
 everything after it works on the (H / stride) x (W / stride) blocks. ``stride = 4`` gives
 400 x 225 blocks for a 1600 x 900 frame: a pedestrian (0.67 m) at 20 m is still 10 blocks
-wide (see ``benchmarks/bench_geometric.py`` for the timings). Call :func:`warm_up` once
+wide (see ``benchmarks/bench_geometric.py`` for the timings). Call :func:`warmup` once
 before a real-time loop.
 """
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -261,8 +262,8 @@ class GeometricView:
 class GeometricRetriever:
     """The geometric view for one camera: the parameters, the rays and scratch memory.
 
-    Use one per camera in a frame loop (it reuses its buffers, so an instance must not be
-    shared between threads).
+    Use one per camera in a frame loop: it reuses its scratch buffers from frame to frame
+    (one set per thread, so an instance may be shared between threads).
 
     Parameters
     ----------
@@ -285,12 +286,8 @@ class GeometricRetriever:
         rows, cols = -(-camera.height // s), -(-camera.width // s)
         self._M = np.ascontiguousarray(camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K))
         self._origin = np.ascontiguousarray(origin)
-        self._points = np.empty((4, rows, cols), dtype=np.float32)  # x, y, z, d
-        self._invalid_px = np.empty((rows, cols), dtype=np.int32)
-        self._obstacle = np.empty((rows, cols), dtype=np.uint8)
-        self._corridor = np.empty((rows, cols), dtype=np.uint8)
-        self._labels = np.empty((rows, cols), dtype=np.int32)
-        self._candidates = np.empty(rows * cols, dtype=np.int64)
+        self._blocks = (rows, cols)
+        self._local = threading.local()
         self._uniforms = np.random.default_rng(params.seed).random((params.ransac_iterations, 3))
         # where each block centre's ray meets the nominal ground, and the block sizes
         i0 = np.arange(rows) * s
@@ -314,12 +311,25 @@ class GeometricRetriever:
         low = origin[:2] + params.max_range * np.minimum(corners[:, :2].min(axis=0), 0.0) - params.cell_size
         high = origin[:2] + params.max_range * np.maximum(corners[:, :2].max(axis=0), 0.0) + params.cell_size
         self._grid_origin = (float(low[0]), float(low[1]))
-        shape = np.ceil((high - low) / params.cell_size).astype(np.int64)
-        self._grid = np.empty(tuple(shape), dtype=np.int32)
-        self._grid_ids = np.empty_like(self._grid)
+        self._grid_shape = tuple(int(n) for n in np.ceil((high - low) / params.cell_size))
         self._x_end = float(max(high[0], CORRIDOR_STEP_M))
         self._default_corridor = Corridor(params.corridor_half_width)
         self._default_table = self._default_corridor.table(self._x_end, CORRIDOR_STEP_M)
+
+    def _scratch(self) -> threading.local:
+        """This thread's buffers (made on its first frame)."""
+        local = self._local
+        if not hasattr(local, "points"):
+            rows, cols = self._blocks
+            local.points = np.empty((4, rows, cols), dtype=np.float32)  # x, y, z, d
+            local.invalid_px = np.empty((rows, cols), dtype=np.int32)
+            local.obstacle = np.empty((rows, cols), dtype=np.uint8)
+            local.corridor = np.empty((rows, cols), dtype=np.uint8)
+            local.labels = np.empty((rows, cols), dtype=np.int32)
+            local.candidates = np.empty(rows * cols, dtype=np.int64)
+            local.grid = np.empty(self._grid_shape, dtype=np.int32)
+            local.grid_ids = np.empty(self._grid_shape, dtype=np.int32)
+        return local
 
     def __call__(self, depth: np.ndarray, corridor: Corridor | None = None) -> np.ndarray:
         """The objects S of one depth map: :meth:`view`'s ``boxes``."""
@@ -356,34 +366,35 @@ class GeometricRetriever:
         else:
             raise ValueError(f"corridor is a {type(corridor).__name__}, expected a Corridor or None")
         centre_y, tan_heading = table
-        xs, ys, zs, ds = self._points
+        scratch = self._scratch()
+        xs, ys, zs, ds = scratch.points
         n_invalid = kernels.block_points(depth, params.stride, params.edge_spread, self._M,
-                                         self._origin, xs, ys, zs, ds, self._invalid_px)
+                                         self._origin, xs, ys, zs, ds, scratch.invalid_px)
         invalid_fraction = n_invalid / depth.size
         if invalid_fraction > params.max_invalid_fraction:
             raise BlindViewError("invalid", invalid_fraction, params.max_invalid_fraction)
         n_px, n_px_invalid = kernels.footprint_invalid(
-            self._ground_x, self._ground_y, self._ground_d, self._invalid_px.ravel(), self._block_px,
+            self._ground_x, self._ground_y, self._ground_d, scratch.invalid_px.ravel(), self._block_px,
             params.max_range, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width)
         corridor_invalid = n_px_invalid / n_px if n_px else 0.0
         if corridor_invalid > params.max_corridor_invalid_fraction:
             raise BlindViewError("corridor_invalid", corridor_invalid,
                                  params.max_corridor_invalid_fraction)
 
-        x, y, z, d = (a.ravel() for a in self._points)
-        ground, support = self._fit_ground(x, y, z, d)
+        x, y, z, d = (a.ravel() for a in scratch.points)
+        ground, support = self._fit_ground(x, y, z, d, scratch.candidates)
         a, b, c = ground
         n_valid, n_below = kernels.classify(
             x, y, z, d, a, b, c, params.min_height, params.max_height, params.max_range,
             params.below_margin, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width,
-            self._obstacle.ravel(), self._corridor.ravel())
+            scratch.obstacle.ravel(), scratch.corridor.ravel())
         below = n_below / n_valid if n_valid else 0.0
         if below > params.max_below_fraction:
             raise BlindViewError("below_ground", below, params.max_below_fraction)
 
-        n = kernels.label_objects(xs, ys, self._obstacle, *self._grid_origin, params.cell_size,
-                                  self._grid, self._grid_ids, self._labels)
-        stats = kernels.object_stats(self._labels, n, self._corridor, ds, xs, params.min_points,
+        n = kernels.label_objects(xs, ys, scratch.obstacle, *self._grid_origin, params.cell_size,
+                                  scratch.grid, scratch.grid_ids, scratch.labels)
+        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, params.min_points,
                                      params.depth_percentile)
         s = params.stride
         x0, y0 = stats[:, 2] * s, stats[:, 0] * s
@@ -404,20 +415,20 @@ class GeometricRetriever:
             below_ground_fraction=below,
         )
 
-    def _fit_ground(self, x, y, z, d) -> tuple[tuple[float, float, float], float]:
+    def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
         """The road plane ``(a, b, c)`` and its support (share of all blocks), or the
         mounting's ``(0, 0, 0)`` and 0 when no plane within the bounds has enough support."""
         p = self.params
         max_slope = math.tan(math.radians(p.max_tilt_deg))
         band0 = p.max_height_offset + p.ground_tolerance
-        n = kernels.ground_candidates(x, y, z, d, p.ground_range, band0, max_slope, self._candidates)
-        a, b, c, score = kernels.ransac_plane(x, y, z, self._candidates, n, self._uniforms,
+        n = kernels.ground_candidates(x, y, z, d, p.ground_range, band0, max_slope, candidates)
+        a, b, c, score = kernels.ransac_plane(x, y, z, candidates, n, self._uniforms,
                                               p.ransac_score_points, p.ground_tolerance,
                                               max_slope, p.max_height_offset)
         if score == 0:
             return (0.0, 0.0, 0.0), 0.0
         for _ in range(2):
-            a, b, c, inliers = kernels.refine_plane(x, y, z, self._candidates, n, a, b, c,
+            a, b, c, inliers = kernels.refine_plane(x, y, z, candidates, n, a, b, c,
                                                     p.ground_tolerance)
         support = inliers / d.size
         within = a * a + b * b <= max_slope * max_slope and abs(c) <= p.max_height_offset
@@ -437,7 +448,7 @@ class GeometricRetriever:
         return np.ascontiguousarray(depth)
 
 
-def warm_up() -> None:
+def warmup() -> None:
     """Compile (or load from Numba's disk cache) every kernel, on a tiny frame."""
     front = Camera.nuscenes_front()
     tiny = Camera(np.diag([0.02, 0.02, 1.0]) @ front.K, 32, 18, front.cam_to_ego)

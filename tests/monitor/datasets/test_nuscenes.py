@@ -16,7 +16,7 @@ import pytest
 import fuzzcore
 from monitor.geometry.camera import Camera, project_boxes
 from monitor.cli import main
-from monitor.config import MonitorConfig
+from monitor.config import MonitorConfig, RetrievalConfig
 from monitor.depth.files import DepthFolder
 from monitor.datasets.nuscenes import NuScenesReader, category_to_detection_name
 from monitor.depth.prior import save_prior
@@ -221,7 +221,7 @@ def test_the_monitor_runs_on_a_frame(reader):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     prior = np.full((H, W), 1.0 / FAR_M, np.float32)
     # a 160 x 90 image: full resolution and small boxes (the defaults suit 1600 x 900)
-    config = MonitorConfig(retrieval=RetrievalParams(downsample=1, min_size=4.0))
+    config = MonitorConfig(retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1, min_size=4.0)))
     monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, f0.camera, config)
     report = monitor.step(depth, f0.det_boxes3d, f0.det_scores)
     assert report.status == OK, report.reason
@@ -353,7 +353,7 @@ def test_features_command_runs_on_nuscenes(tmp_path, capsys):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     np.save(kwargs["depth"] / "n000__CAM_FRONT__0.npy", depth)
     save_prior(tmp_path / "prior.npy", np.full((H, W), 1.0 / FAR_M, np.float32))
-    (tmp_path / "config.yaml").write_text("retrieval:\n  downsample: 1\n  min_size: 4.0\n")
+    (tmp_path / "config.yaml").write_text("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n")
     out = tmp_path / "f.csv"
     argv = ["features", "-o", str(out), "--split", "all", "--config", str(tmp_path / "config.yaml"),
             "--nuscenes", str(tmp_path), "--version", VERSION, "--detections", str(kwargs["detections"]),

@@ -15,7 +15,7 @@ from scipy import ndimage
 
 from monitor.depth import _geometric_kernels as kernels
 from monitor.depth.geometric import (
-    BlindViewError, CORRIDOR_STEP_M, GeometricParams, GeometricRetriever, warm_up,
+    BlindViewError, CORRIDOR_STEP_M, GeometricParams, GeometricRetriever, warmup,
 )
 from monitor.geometry.boxes import iou
 from monitor.geometry.camera import Camera
@@ -35,7 +35,7 @@ CAR_NEXT_LANE = [14.0, -3.5, 0.865, 1.95, 4.6, 1.73, 0.0]   # the lane to the ri
 
 @pytest.fixture(scope="module", autouse=True)
 def compiled():
-    warm_up()
+    warmup()
 
 
 def _render(boxes, camera=CAMERA):
