@@ -31,6 +31,13 @@ one time in seven with vectorised, reordered sums.
 Every membership, rule strength and aggregated value is >= +0.0 (or NaN, for a NaN input):
 the kernels rely on it where they write ``max``/``min`` updates as ``... + 0.0`` (see
 :func:`_keep`).
+
+No rule fired, and other NaNs: the ``no_rule_fired`` policy answers only where an output's
+set is empty (Mamdani: nothing aggregated on the grid; Sugeno: total weight 0), which the
+defuzzifiers see directly (:func:`_mamdani`, :func:`_sugeno`). Any other NaN propagates: a
+NaN membership gives a NaN rule strength (:func:`_and`, :func:`_or`), a NaN strength makes
+every output its rule concludes NaN, a Sugeno rule output that is NaN (``0 * inf``) gives a
+NaN output (:func:`_infer`).
 """
 from __future__ import annotations
 
@@ -230,6 +237,18 @@ def refresh_tables(fblob, iblob):
 
 # --------------------------------------------------------------------------- lane steps
 @njit(inline="always", **_jit)
+def _and(a, b):
+    """``min(a, b)``, NaN if either is NaN (the builtin ``min`` drops a NaN second argument)."""
+    return a if a != a else (a if a < b else b)
+
+
+@njit(inline="always", **_jit)
+def _or(a, b):
+    """``max(a, b)``, NaN if either is NaN."""
+    return a if a != a else (a if a > b else b)
+
+
+@njit(inline="always", **_jit)
 def _keep(v):
     """``v + 0.0`` for a ``max``/``min`` update ``w[i] = keep(op(w[i], x))``.
 
@@ -285,9 +304,9 @@ def _fire(w, fblob, iblob, m, B):
                     x = 1.0 - x
                 f = w[dst + s]
                 if is_or:
-                    f = max(f, x) if or_m == OR_MAX else f + x - f * x
+                    f = _or(f, x) if or_m == OR_MAX else f + x - f * x
                 else:
-                    f = min(f, x) if and_m == AND_MIN else f * x
+                    f = _and(f, x) if and_m == AND_MIN else f * x
                 w[dst + s] = _keep(f)
         weight = fblob[rule_w + r]
         for s in range(m):
@@ -615,9 +634,31 @@ def _exact_centroid(w, fblob, iblob, o, t, n_sets):
     return num / den
 
 
+@njit(inline="always", **_jit)
+def _fallback(fblob, iblob, o):
+    """Output ``o``'s value when its set is empty: the ``no_rule_fired`` policy."""
+    policy, rng = iblob[POLICY], iblob[F_OUT_RANGE] + 2 * o
+    if policy == P_MIDPOINT:
+        return 0.5 * (fblob[rng] + fblob[rng + 1])
+    return fblob[0] if policy == P_VALUE else math.nan
+
+
+@njit(**_jit)
+def _empty_to_policy(w, fblob, iblob, o, y, m):
+    """Lanes of row ``y`` (output ``o``) that a Mamdani defuzzifier left NaN get the policy.
+
+    With finite rule strengths a Mamdani defuzzifier gives NaN only for an empty set (the
+    aggregated values are finite and >= 0); a NaN strength is dealt with in :func:`_infer`.
+    """
+    fallback = _fallback(fblob, iblob, o)
+    for s in range(m):
+        v = w[y + s]
+        w[y + s] = fallback if v != v else v
+
+
 @njit(**_jit)
 def _mamdani(w, fblob, iblob, o, m, B):
-    """Row R_Y + o = defuzzified output ``o`` (NaN where no rule fires).
+    """Row R_Y + o = defuzzified output ``o`` (the ``no_rule_fired`` policy where its set is empty).
 
     The centroid of a block of LANES_MIN samples or more runs over the lanes; anything else
     runs one sample at a time.
@@ -626,13 +667,14 @@ def _mamdani(w, fblob, iblob, o, m, B):
     method, imp_m, agg_m = iblob[DEFUZZ], iblob[IMP], iblob[AGG]
     usual = imp_m == IMP_MIN and agg_m == AGG_MAX
     n_sets = _active_sets(w, iblob, o, m, B)
+    y = np.uint64(iblob[R_Y] + o) * stride
     if method == D_CENTROID and lanes >= LANES_MIN:
         if usual:  # literal constants: a version of the loops without branches
             _centroid_lanes(w, fblob, iblob, o, n_sets, lanes, stride, IMP_MIN, AGG_MAX)
         else:
             _centroid_lanes(w, fblob, iblob, o, n_sets, lanes, stride, imp_m, agg_m)
+        _empty_to_policy(w, fblob, iblob, o, y, lanes)
         return
-    y = np.uint64(iblob[R_Y] + o) * stride
     tail = np.uint64(iblob[N_ROWS]) * stride
     agg, t = tail + np.uint64(iblob[T_AGG]), int(tail)
     for s in range(lanes):
@@ -654,11 +696,13 @@ def _mamdani(w, fblob, iblob, o, m, B):
             w[y + s] = _centroid_sample(w, fblob, iblob, o, agg, lo, hi)
         else:
             w[y + s] = _grid_scan(w, fblob, iblob, o, agg)
+    _empty_to_policy(w, fblob, iblob, o, y, lanes)
 
 
 @njit(**_jit)
 def _sugeno(w, fblob, iblob, o, m, B):
-    """Row R_Y + o = weighted average (or sum) of the rule outputs of Sugeno output ``o``."""
+    """Row R_Y + o = weighted average (or sum) of the rule outputs of Sugeno output ``o``; the
+    ``no_rule_fired`` policy where the total weight is 0. A NaN rule output (``0 * inf``) gives NaN."""
     m, B = np.uint64(m), np.uint64(B)
     n_in, n_out, K, P = iblob[N_IN], iblob[N_OUT], iblob[N_K], iblob[N_P]
     num, den = np.uint64(iblob[R_NUM]) * B, np.uint64(iblob[R_DEN]) * B
@@ -687,9 +731,10 @@ def _sugeno(w, fblob, iblob, o, m, B):
             w[den + s] += f
     y = np.uint64(iblob[R_Y] + o) * B
     wtaver = iblob[DEFUZZ] == D_WTAVER
+    fallback = _fallback(fblob, iblob, o)
     for s in range(m):
         d = w[den + s]
-        w[y + s] = (w[num + s] / d if wtaver else w[num + s]) if d > 0.0 else math.nan
+        w[y + s] = (w[num + s] / d if wtaver else w[num + s]) if d > 0.0 else fallback
 
 
 @njit(**_jit)
@@ -710,24 +755,26 @@ def _infer(w, fblob, iblob, m, B):
             _sugeno(w, fblob, iblob, o, m, B)
         else:
             _mamdani(w, fblob, iblob, o, m, B)
-    # nothing fired (NaN so far): the declared policy; then any NaN input makes every output NaN
+    # any NaN input makes every output NaN; a NaN rule strength, every output its rule concludes
     m, B = np.uint64(m), np.uint64(B)
-    policy, nan_in = iblob[POLICY], np.uint64(iblob[R_ROW]) * B
+    nan_in = np.uint64(iblob[R_ROW]) * B
     for s in range(m):
         w[nan_in + s] = 0.0
     for v in range(n_in):
         x = np.uint64(v) * B
         for s in range(m):
             w[nan_in + s] = _keep(w[x + s] if w[x + s] != w[x + s] else w[nan_in + s])
+    cons = iblob[I_CONS]
     for o in range(n_out):
-        rng = iblob[F_OUT_RANGE] + 2 * o
-        fallback = (0.5 * (fblob[rng] + fblob[rng + 1]) if policy == P_MIDPOINT
-                    else (fblob[0] if policy == P_VALUE else math.nan))
         y = np.uint64(iblob[R_Y] + o) * B
         for s in range(m):
-            v = w[y + s]
-            v = fallback if v != v else v
-            w[y + s] = w[nan_in + s] if w[nan_in + s] != w[nan_in + s] else v
+            w[y + s] = w[nan_in + s] if w[nan_in + s] != w[nan_in + s] else w[y + s]
+        for r in range(iblob[N_RULES]):
+            if iblob[cons + r * n_out + o] == 0:
+                continue
+            f = np.uint64(iblob[R_FIRE] + r) * B
+            for s in range(m):
+                w[y + s] = w[f + s] if w[f + s] != w[f + s] else w[y + s]
 
 
 @njit(**_jit)

@@ -25,7 +25,11 @@ inputs (n_in rows) | memberships (T) | rule strengths (R) | max-aggregation leve
 term, then its NOT) | one aggregated grid row | centroid numerator | denominator |
 outputs (n_out) -- then per-sample scratch: the fired sets' level rows, codes and grid
 stretches (S each), one sample's aggregated set (res), one sample's set codes and levels
-(S each), exact-centroid breakpoints and sub-breakpoints; S = max(2K, R).
+(S each), exact-centroid breakpoints and sub-breakpoints. Scratch is sized by what the
+system's methods use: S = 2K sets with max aggregation (rules sharing a term merge), R
+otherwise, none for Sugeno; the exact centroid's lists (S^2 / 2 crossing points) only for
+``centroid_exact``. A system whose work array would exceed :data:`MAX_WORK` floats is
+refused (:func:`pack`), naming what needs the room.
 
 Antecedent entries are 0 (don't care) or +-(flat input-term index + 1); consequent
 entries are 0 or +-(term index within the output + 1); negative means NOT.
@@ -39,6 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _kernels as K
+from .errors import RuleBaseError
 from .membership import MAX_PARAMS, resolve_kind
 
 SYSTEMS = {"mamdani": K.MAMDANI, "sugeno": K.SUGENO}
@@ -52,6 +57,8 @@ MAMDANI_DEFUZZIFIERS = {
 }
 SUGENO_DEFUZZIFIERS = {"wtaver": K.D_WTAVER, "wtsum": K.D_WTSUM}
 POLICIES = {"midpoint": K.P_MIDPOINT, "nan": K.P_NAN}  # a number means P_VALUE
+#: most floats one work array may hold (one per thread and call; 2**26 floats = 512 MiB)
+MAX_WORK = 2**26
 
 @dataclass(frozen=True)
 class Layout:
@@ -72,8 +79,31 @@ class Layout:
     antecedent: slice     # iblob, reshape (R, n_in)
 
 
+def _check_size(system, work: int, crossings: int) -> None:
+    """Refuse a system whose work array (``work`` floats, of which ``crossings`` for the exact
+    centroid) would not fit in :data:`MAX_WORK`, saying what needs the room."""
+    if work <= MAX_WORK:
+        return
+    need = f"{work:,} floats ({work * 8 / 2**30:.1f} GiB) of scratch per call and thread"
+    if crossings > MAX_WORK // 2:
+        cause = (f"centroid_exact with {system.aggregation} aggregation over {len(system.rules):,} rules keeps "
+                 f"{crossings:,} crossing points; use max aggregation (sets merge per output term), fewer rules "
+                 "or the centroid defuzzifier")
+        place = "defuzzifier"
+    else:
+        cause = (f"{len(system.rules):,} rules and {sum(len(v.terms) for v in system.inputs):,} input terms "
+                 f"over blocks of {K.BLOCK} samples; split the rule base")
+        place = "rules"
+    raise RuleBaseError(f"this system needs {need}, more than the limit of {MAX_WORK:,} floats: {cause}",
+                        place=place)
+
+
 def pack(system) -> tuple[np.ndarray, np.ndarray, Layout]:
-    """Pack a validated :class:`~fuzzcore.system.FuzzySystem` into ``(fblob, iblob, layout)``."""
+    """Pack a validated :class:`~fuzzcore.system.FuzzySystem` into ``(fblob, iblob, layout)``.
+
+    Raises :class:`~fuzzcore.errors.RuleBaseError` when the work array would exceed
+    :data:`MAX_WORK` floats.
+    """
     n_in, n_out = len(system.inputs), len(system.outputs)
     in_terms = [(i, t) for i, v in enumerate(system.inputs) for t in v.terms]
     T, R = len(in_terms), len(system.rules)
@@ -123,9 +153,13 @@ def pack(system) -> tuple[np.ndarray, np.ndarray, Layout]:
                np.array(rule_or), out_kind.ravel(), np.zeros(n_out * Kmax * 2)]
     i_starts = K.HEADER + np.cumsum([0] + [len(p) for p in parts_i])
     f_starts = np.cumsum([0] + [len(p) for p in parts_f])
-    n_sets = max(2 * Kmax, R)
+    n_sets = 0 if not mamdani else (2 * Kmax if system.aggregation == "max" else R)
+    exact = [n_sets, n_sets, 2 + 6 * n_sets, n_sets * (n_sets - 1) // 2 + 2]
+    if system.defuzzifier != "centroid_exact":
+        exact = [0, 0, 0, 0]
     rows = [n_in, T, R, 2 * Kmax, 1, 1, 1, n_out]  # inputs | mu | fire | level | row | num | den | y
-    tail = [n_sets] * 4 + [max(res, 1), n_sets, n_sets, 2 + 6 * n_sets, n_sets * (n_sets - 1) // 2 + 2]
+    tail = [n_sets] * 4 + [max(res, 1)] + exact
+    _check_size(system, sum(rows) * K.BLOCK + sum(tail), exact[-1])
     header = np.concatenate([header, i_starts[:-1], f_starts[1:-1], np.cumsum(rows),
                              np.cumsum([0] + tail)])  # K.HEADER long
     fblob = np.concatenate(parts_f).astype(np.float64)

@@ -27,10 +27,26 @@ linear     p1, ..., pn, p0       Sugeno output: z = p1 x1 + ... + pn xn + p0
 Where a MATLAB function has a degenerate case (trimf with a == b, smf with a == b, ...) the
 kernel follows MATLAB's own code. Readable aliases (``triangle``, ``trapezoid``, ...) are
 accepted on input and written back under the MATLAB name.
+
+Parameters the kernels' float64 arithmetic cannot evaluate are refused (:func:`check_params`),
+because they would give NaN or a meaningless shape for ordinary inputs:
+
+- every kind but the Sugeno outputs: a parameter beyond +-:data:`POINT_MAX` (half the largest
+  float64), where a difference or sum of two parameters (a width ``b - a``, a midpoint
+  ``(a + b) / 2``) or ``x - c`` overflows to inf, and ``inf / inf`` is NaN;
+- gaussmf, gauss2mf (sigma) and gbellmf (a): a width ``w`` whose ``2 w^2`` is not a positive
+  normal float64 (``|w|`` outside [:data:`WIDTH_MIN`, :data:`WIDTH_MAX`]): sigma = 1e-200
+  squares to 0 and ``exp(-0 / 0)`` at the centre is NaN; gbellmf's ``(x - c) / a`` overflows
+  for every x off the centre.
+
+sigmf, dsigmf and psigmf have no degenerate slope (a = 0 is MATLAB's constant 0.5; any other
+finite a is a sigmoid, however steep); vertex kinds need only the bound on points (a zero
+width is MATLAB's own degenerate case, above).
 """
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from typing import Callable, Sequence
 
@@ -54,9 +70,24 @@ class MFKind:
         return None if self.name == "linear" else len(self.params)
 
 
+#: largest magnitude of a parameter: differences and sums of two parameters stay finite
+POINT_MAX = sys.float_info.max / 2
+#: smallest and largest magnitude of a width (sigma, gbellmf's a): 2 w^2 is a positive normal float64
+WIDTH_MIN = math.sqrt(sys.float_info.min)
+WIDTH_MAX = math.sqrt(sys.float_info.max / 2)
+
+
 def _sorted(params: Sequence[float]) -> str | None:
     if any(a > b for a, b in zip(params, params[1:])):
         return "parameters must be in non-decreasing order"
+    return None
+
+
+def _width(params: Sequence[float], index: int, name: str) -> str | None:
+    w = abs(params[index])
+    if not WIDTH_MIN <= w <= WIDTH_MAX:
+        return (f"parameter {index + 1} ({name}, a width) = {params[index]!r} is degenerate: 2 {name}^2 must be "
+                f"a positive normal float64, so |{name}| must lie in [{WIDTH_MIN:.3g}, {WIDTH_MAX:.3g}]")
     return None
 
 
@@ -65,13 +96,19 @@ def _positive(*indices: int) -> Callable[[Sequence[float]], str | None]:
         bad = [i for i in indices if not params[i] > 0]
         if bad:
             return f"parameter {bad[0] + 1} (a width) must be > 0"
+        for i in indices:
+            problem = _width(params, i, "sigma")
+            if problem:
+                return problem
         return None
 
     return check
 
 
 def _nonzero_first(params: Sequence[float]) -> str | None:
-    return "parameter 1 (a, the width) must be != 0" if params[0] == 0 else None
+    if params[0] == 0:
+        return "parameter 1 (a, the width) must be != 0"
+    return _width(params, 0, "a")
 
 
 def _pimf(params: Sequence[float]) -> str | None:
@@ -148,4 +185,9 @@ def check_params(kind: MFKind, params: Sequence[float], n_inputs: int | None = N
         return f"{kind.name} takes {expected} parameters ({names}), got {len(params)}"
     if not all(math.isfinite(p) for p in params):
         return "parameters must be finite numbers"
+    if not kind.output_only:
+        far = [p for p in params if abs(p) > POINT_MAX]
+        if far:
+            return (f"parameter {far[0]!r} is degenerate: beyond +-{POINT_MAX:.4g} (half the largest float64) "
+                    "differences of parameters overflow")
     return kind.check(params)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import operator
 from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
@@ -19,6 +20,7 @@ from . import _kernels as K
 from .compiled import (AGGREGATIONS, AND_METHODS, IMPLICATIONS, MAMDANI_DEFUZZIFIERS,
                        OR_METHODS, POLICIES, SUGENO_DEFUZZIFIERS, SYSTEMS, Layout, pack)
 from .errors import RuleBaseError
+from .inputs import REAL_SCALARS, real_array
 from .membership import PIECEWISE_LINEAR, resolve_kind
 from .rules import Rule, format_rule
 from .variables import Variable
@@ -27,9 +29,10 @@ from .variables import Variable
 PARALLEL_THRESHOLD = 4 * K.CHUNK
 
 
-def _choice(value: Any, choices: Mapping[str, int], what: str) -> None:
+def _choice(value: Any, choices: Mapping[str, int], what: str, of: str = "") -> None:
+    """Refuse ``value`` of setting ``what`` unless among ``choices`` (``of`` says whose choices)."""
     if value not in choices:
-        raise RuleBaseError(f"{what} {value!r}: expected one of {', '.join(choices)}", place=what)
+        raise RuleBaseError(f"{value!r}: expected one of {', '.join(choices)}{of}", place=what)
 
 
 @dataclass(frozen=True)
@@ -60,6 +63,8 @@ class FuzzySystem:
     no_rule_fired : "midpoint" | "nan" | float
         Output when no rule fires (empty aggregated set / all Sugeno weights 0):
         MATLAB's midpoint of the output range, NaN, or a fixed number. Never a silent 0.
+        Only an empty set takes it: any other NaN (a NaN membership, a Sugeno rule output
+        ``0 * inf``) gives NaN.
     description : str
     metadata : mapping
         Free provenance (e.g. how a tuned system was made); saved and loaded with the system.
@@ -100,8 +105,8 @@ class FuzzySystem:
         _choice(self.implication, IMPLICATIONS, "implication")
         _choice(self.aggregation, AGGREGATIONS, "aggregation")
         mamdani = self.type == "mamdani"
-        _choice(self.defuzzifier, MAMDANI_DEFUZZIFIERS if mamdani else SUGENO_DEFUZZIFIERS,
-                f"defuzzifier (for a {self.type} system)")
+        _choice(self.defuzzifier, MAMDANI_DEFUZZIFIERS if mamdani else SUGENO_DEFUZZIFIERS, "defuzzifier",
+                f" (the defuzzifiers of a {self.type} system)")
         if isinstance(self.resolution, bool) or not isinstance(self.resolution, numbers.Integral) \
                 or self.resolution < 2:
             raise RuleBaseError(f"resolution {self.resolution!r}: expected an integer >= 2", place="resolution")
@@ -166,6 +171,12 @@ class FuzzySystem:
                 if self.defuzzifier == "centroid_exact" and kind.name not in PIECEWISE_LINEAR:
                     raise RuleBaseError(f"{kind.name} is not piecewise linear; centroid_exact needs one of "
                                         f"{', '.join(sorted(PIECEWISE_LINEAR))}", place=where)
+        if self.type == "mamdani":
+            for var in self.outputs:
+                lo, hi = var.range
+                if not math.isfinite((self.resolution - 1) * (hi - lo)):
+                    raise RuleBaseError(f"range [{lo!r}, {hi!r}] is degenerate for a grid of {self.resolution} "
+                                        "points: (resolution - 1) * (hi - lo) overflows", place=f"outputs.{var.name}")
         if self.defuzzifier == "centroid_exact" and self.aggregation == "probor":
             raise RuleBaseError("centroid_exact needs aggregation 'max' or 'sum' (probor is not "
                                 "piecewise linear)", place="aggregation")
@@ -232,24 +243,46 @@ class FuzzySystem:
         name (``fis.infer(iou=..., rdd=...)``). Scalars give a float (single output) or an
         ndarray of shape (n_out,); arrays broadcast against each other and give an ndarray
         of the broadcast shape (single output) or broadcast shape + (n_out,).
+
+        Inputs are real numbers (Python or NumPy integers and floats, NaN and inf included)
+        or arrays of them. ``None``, text, ``bool``, complex numbers, dates, time spans,
+        masked arrays and object arrays raise ``TypeError`` naming the input; a number too
+        large for a float64 raises ``ValueError`` (:func:`fuzzcore.inputs.real_array`).
         """
-        if not kwargs and len(args) == self._fast_arity:
-            for a in args:  # the compiled scalar path takes Python floats (a loop: no generator)
-                if type(a) is not float:
+        # the scalar path: real scalars of the exact types in REAL_SCALARS go straight to the
+        # compiled entry point, which converts each as float() would (a loop: no generator)
+        if not kwargs:
+            if len(args) == self._fast_arity:
+                for a in args:
+                    if type(a) not in REAL_SCALARS:
+                        break
+                else:
+                    try:
+                        return self._fast(args, self._fblob, self._iblob)
+                    except (TypeError, OverflowError):  # an int beyond float64: named below
+                        pass
+        elif not args and len(kwargs) == self._fast_arity:
+            try:  # as many names as inputs, each found: exactly the inputs
+                values = self._by_name(kwargs)
+            except KeyError:
+                values = ()
+            for a in values:
+                if type(a) not in REAL_SCALARS:
                     break
             else:
-                return self._fast(args, self._fblob, self._iblob)
+                if values:
+                    try:
+                        return self._fast(values, self._fblob, self._iblob)
+                    except (TypeError, OverflowError):
+                        pass
         values = self._inputs(args, kwargs)
-        if len(self.outputs) == 1 and all(type(v) is float for v in values):
+        if len(self.outputs) == 1 and all(type(v) in REAL_SCALARS for v in values):
             fast = self._fast if self._fast is not None else self._bind_fast()
-            return fast(tuple(values), self._fblob, self._iblob)
-        arrays = []
-        for name, value in zip(self.input_names, values):
             try:
-                arrays.append(np.asarray(value, dtype=np.float64))
-            except (TypeError, ValueError):
-                raise TypeError(f"input {name!r}: expected a number or an array of numbers, "
-                                f"got {value!r}") from None
+                return fast(tuple(values), self._fblob, self._iblob)
+            except (TypeError, OverflowError):
+                pass
+        arrays = [real_array(value, f"input {name!r}") for name, value in zip(self.input_names, values)]
         try:
             arrays = np.broadcast_arrays(*arrays)
         except ValueError:
@@ -274,7 +307,7 @@ class FuzzySystem:
         -------
         ndarray of shape (n_samples, n_outputs)
         """
-        X = np.asarray(X, dtype=np.float64)
+        X = real_array(X, "X")
         if X.ndim != 2 or X.shape[1] != len(self.inputs):
             raise ValueError(f"X has shape {X.shape}, expected (n_samples, {len(self.inputs)}) "
                              f"with columns {', '.join(self.input_names)}")
@@ -289,10 +322,11 @@ class FuzzySystem:
     def explain(self, *args: Any, **kwargs: Any) -> "Explanation":
         """Evaluate one sample and say why: memberships, rule strengths, aggregated sets."""
         values = self._inputs(args, kwargs)
-        try:
-            x = np.array([[float(v) for v in values]])
-        except (TypeError, ValueError):
-            raise TypeError(f"explain takes one sample: a number per input, got {values!r}") from None
+        arrays = [real_array(value, f"input {name!r}") for name, value in zip(self.input_names, values)]
+        shaped = [f"{name}{a.shape}" for name, a in zip(self.input_names, arrays) if a.shape != ()]
+        if shaped:
+            raise TypeError(f"explain takes one sample, a number per input; got arrays: {', '.join(shaped)}")
+        x = np.array([[float(a) for a in arrays]])
         layout = self._layout
         mu = np.empty(layout.n_terms_in)
         fire = np.empty(layout.n_rules)
@@ -332,13 +366,19 @@ class FuzzySystem:
         """Compile the scalar kernel for this input count and keep its compiled entry point.
 
         Calling the entry point skips Numba's per-call type dispatch (about half the cost
-        of a scalar call); the arguments are then always (tuple of floats, fblob, iblob).
+        of a scalar call); the arguments are then always (tuple, fblob, iblob), the tuple
+        holding scalars of the types in :data:`~fuzzcore.inputs.REAL_SCALARS`, which the
+        entry point converts as ``float()`` does (``PyNumber_Float``; it would also parse
+        text and take ``True`` as 1.0, hence the exact-type check before every call).
         """
         args = tuple(0.5 * sum(v.range) for v in self.inputs)
         K.infer_one(args, self._fblob, self._iblob)
         signature = (numba.typeof(args), numba.typeof(self._fblob), numba.typeof(self._iblob))
         fast = K.infer_one.overloads[signature].entry_point
+        names = self.input_names
+        by_name = operator.itemgetter(*names) if len(names) > 1 else (lambda kwargs: (kwargs[names[0]],))
         object.__setattr__(self, "_fast", fast)
+        object.__setattr__(self, "_by_name", by_name)
         object.__setattr__(self, "_fast_arity", len(self.inputs) if len(self.outputs) == 1 else -1)
         return fast
 
@@ -347,6 +387,7 @@ class FuzzySystem:
         state = dict(self.__dict__)
         state["_fast"] = None
         state.pop("_fast_arity", None)
+        state.pop("_by_name", None)
         return state
 
     def save(self, path) -> None:

@@ -56,6 +56,9 @@ class Variable:
         lo, hi = (float(v) for v in self.range)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
             raise RuleBaseError(f"range [{lo}, {hi}] of {self.name!r}: expected finite lo < hi")
+        if not math.isfinite(hi - lo):
+            raise RuleBaseError(f"range [{lo}, {hi}] of {self.name!r} is degenerate: its width hi - lo overflows "
+                                "to inf")
         object.__setattr__(self, "range", (lo, hi))
         object.__setattr__(self, "terms", tuple(self.terms))
 

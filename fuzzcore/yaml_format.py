@@ -30,13 +30,25 @@ Schema (every key but ``inputs``, ``outputs`` and ``rules`` is optional)::
                                    # (``: 2`` in a .fis rule line); it does not change the result
 
 Reading uses YAML's safe loader only (a tag that would construct an object is refused),
-refuses duplicate keys and unknown keys, and reports errors with the file, the line and
-the YAML path of the offending entry.
+refuses duplicate keys and unknown keys, nesting deeper than :data:`MAX_DEPTH` levels
+(which real rule bases never need, and which would otherwise exhaust Python's recursion)
+and text that is not UTF-8, and reports errors with the file, the line and the YAML path
+of the offending entry.
+
+Cut-short files. :func:`dumps` opens the text with :data:`HEADER` and closes it with the
+line :data:`END`. A file that starts with the header but has no end line was cut short (an
+interrupted copy or write: the file can hold 3 of its 9 rules and still be valid YAML) and
+is refused. Files without the header (written by hand, or by an older fuzzcore) need no
+end line: their only safeguard is YAML's own syntax and the checks above. A marker, rather
+than a count or checksum in the file, because rule bases are meant to be edited by hand:
+adding a rule must not break the file. A user who removes the end line while editing is
+told to put it back or remove the header.
 """
 from __future__ import annotations
 
 import math
 import numbers
+import sys
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -44,6 +56,7 @@ from typing import Any
 import yaml
 
 from .errors import RuleBaseError
+from .membership import check_params, resolve_kind
 from .rules import CONNECTIVES, Rule, format_rule, parse_rule
 from .system import FuzzySystem
 from .variables import Term, Variable
@@ -54,6 +67,12 @@ _SETTINGS = {
     "no_rule_fired": "no_rule_fired", "type": "type", "name": "name", "description": "description",
 }
 _TOP_KEYS = set(_SETTINGS) | {"inputs", "outputs", "rules", "metadata"}
+#: deepest nesting of YAML collections read (a rule base needs 5; metadata a few more)
+MAX_DEPTH = 32
+#: first line of a file :func:`dumps` writes; such a file must contain the line :data:`END`
+HEADER = "# fuzzy rule base (fuzzcore YAML; see fuzzcore/yaml_format.py for the schema); it ends with the line below"
+#: last line of a file :func:`dumps` writes
+END = "# end of rule base"
 
 
 class _Map(dict):
@@ -64,7 +83,21 @@ class _Map(dict):
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """Safe loading, plus: duplicate keys are errors, mappings remember their lines."""
+    """Safe loading, plus: duplicate keys are errors, mappings remember their lines, nesting
+    deeper than :data:`MAX_DEPTH` is an error."""
+
+    _depth = 0
+
+    def compose_node(self, parent, index):
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                mark = self.peek_event().start_mark
+                raise RuleBaseError(f"lists or mappings nested more than {MAX_DEPTH} levels deep; a rule base "
+                                    "needs a handful", place=f"line {mark.line + 1}")
+            return super().compose_node(parent, index)
+        finally:
+            self._depth -= 1
 
     def construct_yaml_map(self, node):
         data = _Map()
@@ -83,6 +116,13 @@ class _StrictLoader(yaml.SafeLoader):
 
 
 _StrictLoader.add_constructor("tag:yaml.org,2002:map", _StrictLoader.construct_yaml_map)
+
+
+#: the largest finite float64, as an integer (a larger YAML integer cannot be a parameter)
+_LARGEST = int(sys.float_info.max)
+#: why a number-looking text such as 1e3 is text to YAML 1.1, and how to write it
+_YAML11_HINT = ("; YAML 1.1 (which PyYAML reads) takes {value} as text, not a number: exponent notation needs "
+                "a dot in the mantissa and a signed exponent (1.0e+3, not 1e3 or 1.0e3); write {number}")
 
 
 class _Reader:
@@ -110,8 +150,17 @@ class _Reader:
         return value
 
     def number(self, value: Any, path: str, parent: Any, key: Any) -> float:
+        if isinstance(value, int) and not isinstance(value, bool) and abs(value) > _LARGEST:
+            raise self.error(f"the integer {str(value)[:20]}... ({len(str(abs(value)))} digits) is too large for a "
+                             "float64 (|x| < 1.8e308)", path, parent, key)
         if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-            raise self.error(f"{value!r} is not a finite number", path, parent, key)
+            hint = ""
+            if isinstance(value, str):
+                try:
+                    hint = _YAML11_HINT.format(value=value, number=_scalar(float(value)))
+                except ValueError:
+                    pass
+            raise self.error(f"{value!r} is not a finite number{hint}", path, parent, key)
         return float(value)
 
     def variable(self, name: Any, spec: Any, path: str, parent: _Map) -> Variable:
@@ -132,9 +181,14 @@ class _Reader:
                                  tpath, terms, term_name)
             params = [self.number(v, tpath, terms, term_name) for v in term_spec[1:]]
             try:
-                built.append(Term(term_name, term_spec[0], params))
+                term = Term(term_name, term_spec[0], params)
             except (RuleBaseError, ValueError) as exc:
                 raise self.error(getattr(exc, "detail", str(exc)), tpath, terms, term_name) from None
+            kind = resolve_kind(term.kind)
+            problem = None if kind.n_params is None else check_params(kind, term.params)  # linear: in the system
+            if problem:
+                raise self.error(f"{kind.name} {list(term.params)}: {problem}", tpath, terms, term_name)
+            built.append(term)
         try:
             return Variable(name, (lo, hi), tuple(built))
         except RuleBaseError as exc:
@@ -153,7 +207,12 @@ class _Reader:
         spec = data[key]
         if not isinstance(spec, dict) or not spec:
             raise self.error("expected a non-empty mapping of variable name: {range, terms}", key, data, key)
-        return tuple(self.variable(name, value, f"{key}.{name}", spec) for name, value in spec.items())
+        variables = tuple(self.variable(name, value, f"{key}.{name}", spec) for name, value in spec.items())
+        for var in variables:  # before the rules, which would report a missing term
+            if key == "outputs" and not var.terms:
+                raise self.error(f"output {var.name!r} has no terms (terms: {{}}); an output needs at least one "
+                                 "term for rules to conclude", f"{key}.{var.name}.terms", spec[var.name], "terms")
+        return variables
 
     def system(self, data: Any) -> FuzzySystem:
         if data is None:
@@ -198,6 +257,12 @@ class _Reader:
 
 def _parse(text: str, source: str | None) -> Any:
     """Strict safe YAML (mappings as :class:`_Map`); any failure is a :class:`RuleBaseError`."""
+    lines = text.splitlines()
+    if lines and lines[0].rstrip() == HEADER and END not in (line.rstrip() for line in lines):
+        raise RuleBaseError(f"the file starts with fuzzcore's header line but has no closing line {END!r}: it was "
+                            "cut short (an interrupted copy or write) and may have lost rules. Restore it from a "
+                            "copy; if you removed the line while editing, put it back at the end (or remove the "
+                            "first line)", source=source, place=f"line {len(lines)}")
     try:
         return yaml.load(text, Loader=_StrictLoader)
     except RuleBaseError as exc:
@@ -244,10 +309,22 @@ def loads(text: str, source: str | None = None) -> FuzzySystem:
     return _Reader(source).system(_parse(text, source))
 
 
+def decode(data: bytes, source: str) -> str:
+    """UTF-8 text of a file's bytes (a byte-order mark dropped); :class:`RuleBaseError` naming
+    ``source``, the line and the byte when it is not UTF-8."""
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data.count(b"\n", 0, exc.start) + 1
+        raise RuleBaseError(f"not UTF-8 text: byte {data[exc.start:exc.start + 1].hex(' ')!s} at offset "
+                            f"{exc.start} cannot be decoded ({exc.reason}); save the file as UTF-8",
+                            source=source, place=f"line {line}") from None
+
+
 def read(path: str | Path) -> FuzzySystem:
-    """Read a YAML rule base file."""
+    """Read a YAML rule base file (UTF-8)."""
     path = Path(path)
-    return loads(path.read_text(encoding="utf-8"), source=str(path))
+    return loads(decode(path.read_bytes(), str(path)), source=str(path))
 
 
 def _scalar(value: Any) -> str:
@@ -274,7 +351,7 @@ def _variable_lines(var: Variable) -> list[str]:
 
 def dumps(system: FuzzySystem) -> str:
     """The YAML text of ``system``; :func:`loads` reads it back equal."""
-    lines = ["# fuzzy rule base (fuzzcore YAML; see fuzzcore/yaml_format.py for the schema)"]
+    lines = [HEADER]
     lines.append(f"name: {_scalar(system.name)}")
     if system.description:
         lines.append(f"description: {_scalar(system.description)}")
@@ -314,5 +391,6 @@ def dumps(system: FuzzySystem) -> str:
             raise RuleBaseError(f"metadata holds a value YAML cannot write ({exc}); use plain numbers, "
                                 "text, lists and mappings", place="metadata") from None
         lines += block.rstrip("\n").split("\n")
+    lines.append(END)
     return "\n".join(lines) + "\n"
 

@@ -25,6 +25,8 @@ from typing import Sequence
 
 import numpy as np
 
+from ..inputs import real_array
+
 #: spellings of a missing value in a CSV cell (compared lower-case, stripped)
 MISSING = frozenset({"", "nan"})
 
@@ -157,6 +159,22 @@ def read_csv(path: str | Path, inputs: Sequence[str], target: str = "target",
                         n_no_features=n_no_features, source=str(path), input_names=tuple(inputs))
 
 
+def _check_labels(groups: np.ndarray) -> None:
+    """Refuse group labels that are missing (NaN, None) or not labels at all (complex, masked)."""
+    if isinstance(groups, np.ma.MaskedArray) or groups.dtype.kind in "cmMV":
+        raise ValueError(f"groups has dtype {groups.dtype}{' (masked)' if np.ma.isMaskedArray(groups) else ''}; "
+                         "expected labels: integers or text")
+    if groups.dtype.kind == "f":
+        missing = np.flatnonzero(np.isnan(groups))
+    elif groups.dtype.kind == "O":
+        missing = np.flatnonzero([g is None or (isinstance(g, float) and g != g) for g in groups])
+    else:
+        return
+    if missing.size:
+        raise ValueError(f"groups has {missing.size} missing label(s) (NaN or None; first: sample {missing[0]}); "
+                         "every sample needs its group (a NaN would make a group of its own)")
+
+
 def check_data(system, X, y, groups=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Validate tuning data against ``system``; return ``(X, Y, groups)`` as the tuners use them.
 
@@ -169,7 +187,8 @@ def check_data(system, X, y, groups=None) -> tuple[np.ndarray, np.ndarray, np.nd
         Targets, finite and inside each output's range (a Mamdani output can reach no
         value outside it).
     groups : array_like of shape (n_samples,), optional
-        Group labels (folds never split a group).
+        Group labels (folds never split a group): numbers or text; NaN and None are refused
+        (each NaN would be a group of its own).
 
     Returns
     -------
@@ -177,14 +196,14 @@ def check_data(system, X, y, groups=None) -> tuple[np.ndarray, np.ndarray, np.nd
     Y : ndarray (n_samples, n_outputs), float64, C-contiguous
     groups : ndarray (n_samples,) or None
     """
-    X = np.asarray(X, dtype=np.float64)
+    X = real_array(X, "X")
     n_in, n_out = len(system.inputs), len(system.outputs)
     if X.ndim != 2 or X.shape[1] != n_in:
         raise ValueError(f"X has shape {X.shape}, expected (n_samples, {n_in}) with columns "
                          f"{', '.join(system.input_names)}")
     if X.shape[0] == 0:
         raise ValueError("X has no rows; tuning needs data")
-    Y = np.asarray(y, dtype=np.float64)
+    Y = real_array(y, "y")
     if Y.ndim == 1 and n_out == 1:
         Y = Y[:, None]
     if Y.ndim != 2 or Y.shape != (X.shape[0], n_out):
@@ -207,4 +226,5 @@ def check_data(system, X, y, groups=None) -> tuple[np.ndarray, np.ndarray, np.nd
         groups = np.asarray(groups)
         if groups.shape != (X.shape[0],):
             raise ValueError(f"groups has shape {groups.shape}, expected ({X.shape[0]},): one label per sample")
+        _check_labels(groups)
     return np.ascontiguousarray(X), np.ascontiguousarray(Y), groups

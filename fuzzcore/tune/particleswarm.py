@@ -35,6 +35,10 @@ import numpy as np
 from .base import CALLBACK_STOP, CONVERGED, MAX_ITER, Tuner, check_number, stalled, stop_reason
 from .rule_space import RuleSpace
 
+#: largest swarm: each iteration draws an S x S matrix of neighbour keys and partitions it
+#: (16 S^2 bytes: 256 MiB at this size)
+MAX_SWARM = 4096
+
 
 class ParticleSwarm(Tuner):
     """Learn rule consequents by particle swarm optimisation.
@@ -52,7 +56,7 @@ class ParticleSwarm(Tuner):
         (:mod:`fuzzcore.tune.base`).
     metric : {"rmse", "mae"}
     swarm_size : int
-        Particles (MATLAB's ``SwarmSize``). Paper: 100.
+        Particles (MATLAB's ``SwarmSize``), 3 .. :data:`MAX_SWARM`. Paper: 100.
     max_iter : int
         Iterations after the initial swarm. Paper: 20.
     inertia_range : (float, float)
@@ -104,6 +108,10 @@ class ParticleSwarm(Tuner):
 
     def _check_params(self) -> None:
         check_number("swarm_size", self.swarm_size, 3, integer=True)
+        if self.swarm_size > MAX_SWARM:
+            size = 16 * self.swarm_size**2 / 2**30
+            raise ValueError(f"swarm_size = {self.swarm_size!r}, must be <= {MAX_SWARM}: each iteration draws an "
+                             f"S x S matrix of neighbour choices, {size:,.3g} GiB for this swarm")
         check_number("max_iter", self.max_iter, 1, integer=True)
         if not (isinstance(self.inertia_range, (tuple, list)) and len(self.inertia_range) == 2):
             raise ValueError(f"inertia_range = {self.inertia_range!r}: expected (low, high)")

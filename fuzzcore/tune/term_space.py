@@ -11,12 +11,15 @@ Every parameter has a role, from its membership-function kind:
 role     meaning                                         constraint               scale
 =======  ==============================================  =======================  ========
 point    a place on the variable's axis (vertex, centre) inside the range          span
-width    a spread in the variable's units (sigma, a)     > 0                      span
+width    a spread in the variable's units (sigma, a)     > 0, not degenerate (1)  span
 slope    a steepness (sigmf's a), units^-1               none                     1 / span
 shape    a unitless exponent (gbellmf's b)               > 0                      1
 =======  ==============================================  =======================  ========
 
-and the vertex kinds (trimf, trapmf, pimf, smf, zmf, linsmf, linzmf) keep their points
+(1) inside (:data:`~fuzzcore.membership.WIDTH_MIN`, :data:`~fuzzcore.membership.WIDTH_MAX`]:
+``2 w^2`` stays a positive normal float64.
+
+The vertex kinds (trimf, trapmf, pimf, smf, zmf, linsmf, linzmf) keep their points
 in non-decreasing order with a positive width (first point < last point). With
 ``keep_order`` (the default), the terms of a variable also keep their order: each
 corner of a vertex term (left foot, left shoulder, right shoulder, right foot; a
@@ -54,7 +57,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..membership import resolve_kind
+from ..membership import WIDTH_MAX, WIDTH_MIN, resolve_kind
 from ..variables import Term
 
 ROLES: dict[str, tuple[str, ...]] = {
@@ -188,10 +191,10 @@ class TermSpace:
                         lower.append(-np.inf)
                         upper.append(np.inf)
                         strict.append(False)
-                    else:  # width, shape: positive
+                    else:  # width, shape: positive (a width also not degenerate: fuzzcore.membership)
                         scale.append(span if role == "width" else 1.0)
-                        lower.append(0.0)
-                        upper.append(np.inf)
+                        lower.append(WIDTH_MIN if role == "width" else 0.0)
+                        upper.append(WIDTH_MAX if role == "width" else np.inf)
                         strict.append(True)
                         if not value > 0:
                             raise ValueError(f"term {term.name!r} of {var.name!r} ({kind} {list(term.params)}): "

@@ -6,6 +6,7 @@ order); ``--explain`` also prints the memberships and the rules that fired.
 from __future__ import annotations
 
 import argparse
+import math
 
 import fuzzcore
 
@@ -31,10 +32,15 @@ def _values(fis: fuzzcore.FuzzySystem, tokens: list[str]) -> tuple[dict[str, flo
             raise ValueError(f"unexpected {flag!r}; {fis.name} takes {usage}")
         if value is None:
             raise ValueError(f"{flag} needs a value")
+        if name in values:
+            raise ValueError(f"{flag} is given twice ({values[name]!r}, then {value!r}); give each input once")
         try:
-            values[name] = float(value)
+            number = float(value)
         except ValueError:
             raise ValueError(f"{flag} {value!r}: expected a number") from None
+        if math.isinf(number) and "inf" not in value.lower():
+            raise ValueError(f"{flag} {value!r} is too large for a float64 (|x| < 1.8e308)")
+        values[name] = number
     missing = [n for n in fis.input_names if n not in values]
     if missing:
         raise ValueError(f"missing {', '.join('--' + n for n in missing)}; {fis.name} takes {usage}")

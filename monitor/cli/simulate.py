@@ -1,93 +1,272 @@
-"""``fuzzrisk simulate``: the monitor and shield in a closed loop (paper, Sec. IV-B).
+"""``fuzzrisk simulate``: the monitor and its shield in a closed loop with traffic (paper, Sec. IV-B).
 
-A car drives toward a stationary obstacle its detector mostly misses (by default an animal
-the size of the paper's cow); each seed is driven by the baseline planner alone and with the
-monitor's shield. Prints the collisions of both and the share of the baseline's collisions
-the shield avoided, and writes ``trials.jsonl`` and ``simulation.png``.
+Scenarios of :mod:`monitor.offline.scenarios` (a rare object, a pedestrian between parked
+cars, a lead vehicle braking hard, a cut-in, hazard-free drives), ``--scenarios`` of each
+kind, spread over the conditions; each is driven by the baseline and by the shielded car
+(:mod:`monitor.offline.closed_loop`). ``--sweep M`` drives the first M scenarios of each kind
+with a grid of shield settings as well. Writes, in ``--out``:
+
+- ``runs.jsonl``: one line per run (per driver), with its history;
+- ``summary.md`` and ``summary.json``: the measures of :mod:`monitor.offline.safety_measures`;
+- ``traces.png``, ``conditions.png`` and, with ``--sweep``, ``sweep.jsonl`` and ``trade_off.png``.
+
+Needs highway-env (``pip install fuzzrisk[sim]``). ``--workers N`` drives scenarios in N
+processes; the results are the same, in the same order, as with one.
 """
 from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import asdict
+import math
+import os
+import sys
+import time
 from pathlib import Path
 
-import matplotlib
+from tqdm import tqdm
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from tqdm import tqdm  # noqa: E402
+HELP = "closed loop with traffic: collisions avoided and false braking of the monitor's shield"
 
-import fuzzcore  # noqa: E402
-from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark  # noqa: E402
-from monitor.config import load_config  # noqa: E402
-from monitor.risk_monitor import RiskMonitor  # noqa: E402
-from monitor.shipped import shipped_rules  # noqa: E402
-from monitor.offline.simulation import Scenario, run_experiment, summarise  # noqa: E402
-from monitor.synthetic import CONDITIONS  # noqa: E402
-from monitor.synthetic.scene import ACTOR_CLASSES  # noqa: E402
-
-HELP = "closed-loop safeguarding: collisions with and without the monitor's shield"
+SWEEP_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+#: (threshold - release, hold_frames) of the sweep's hysteresis settings
+SWEEP_HYSTERESIS = ((0.0, 0), (0.1, 0), (0.0, 5), (0.1, 5))
+OUTPUTS = ("runs.jsonl", "summary.md", "summary.json", "traces.png", "conditions.png")
+SWEEP_OUTPUTS = ("sweep.jsonl", "trade_off.png")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from monitor.offline.scenarios import KINDS
+    from monitor.synthetic import CONDITIONS
+
     parser.add_argument("-o", "--out", default="fuzzrisk-simulation", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace outputs already in --out")
     parser.add_argument("--rules", default=None, help="rule base (default: the shipped rules/fuzzrisk.yaml)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
-    parser.add_argument("--trials", type=int, default=10, help="seeds, each driven with and without the shield")
-    parser.add_argument("--condition", default="nominal", choices=list(CONDITIONS), help="degradations")
-    parser.add_argument("--obstacle", default="animal", choices=sorted(ACTOR_CLASSES),
-                        help="the obstacle's class (default %(default)s: mostly missed by the detector)")
-    parser.add_argument("--distance", type=float, default=Scenario.distance,
-                        help="initial gap, metres (default %(default)s)")
-    parser.add_argument("--speed", type=float, default=Scenario.speed,
-                        help="initial speed, m/s (default %(default)s: 15 km/h, parking-lot speed as in the paper)")
-    parser.add_argument("--seed", type=int, default=0, help="first seed (default %(default)s)")
+    parser.add_argument("--scenarios", type=int, default=12,
+                        help="scenarios per kind, spread over the conditions (default %(default)s)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the first scenario (default %(default)s)")
+    parser.add_argument("--kind", nargs="+", default=list(KINDS), choices=list(KINDS), help="scenario kinds")
+    parser.add_argument("--condition", nargs="+", default=list(CONDITIONS), choices=list(CONDITIONS),
+                        help="conditions (default: all six)")
+    parser.add_argument("--sweep", type=int, default=0,
+                        help="also drive the first SWEEP scenarios of each kind with every shield setting of "
+                             "the threshold/hysteresis grid (default 0: no sweep)")
+    parser.add_argument("--workers", type=int, default=1, help="processes (default %(default)s)")
+
+
+def _check(args: argparse.Namespace) -> list[Path]:
+    for name in ("scenarios", "workers"):
+        if getattr(args, name) < 1:
+            raise ValueError(f"--{name} {getattr(args, name)}: must be >= 1")
+    if args.seed < 0:
+        raise ValueError(f"--seed {args.seed}: must be >= 0")
+    if not 0 <= args.sweep <= args.scenarios:
+        raise ValueError(f"--sweep {args.sweep}: must be in [0, --scenarios = {args.scenarios}]")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {out}: exists and is not a folder")
+    targets = [out / name for name in OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ())]
+    present = [str(p) for p in targets if p.exists()]
+    if present and not args.overwrite:
+        raise ValueError(f"--out {out}: {', '.join(present)} already exist; pass --overwrite to replace them")
+    return targets
+
+
+def _jobs(kinds, conditions, n, seed):
+    from monitor.offline.scenarios import ScenarioSpec
+
+    return [ScenarioSpec(kind, conditions[j % len(conditions)], seed + j) for kind in kinds for j in range(n)]
+
+
+def sweep_settings(default):
+    """The shield settings of the sweep (ShieldConfig), the default's deceleration in all."""
+    from monitor.config import ShieldConfig
+
+    return [ShieldConfig(t, round(t - gap, 10), hold, default.deceleration)
+            for t in SWEEP_THRESHOLDS for gap, hold in SWEEP_HYSTERESIS]
+
+
+# one monitor per process, built by _init (or in-process for a serial run)
+_STATE: dict = {}
+
+
+def _init(rules, config_path, prior, camera) -> None:
+    import fuzzcore
+    from monitor.config import load_config
+    from monitor.offline.closed_loop import Perception
+    from monitor.risk_monitor import RiskMonitor
+
+    config = load_config(config_path)
+    _STATE["monitor"] = RiskMonitor(fuzzcore.load(rules), prior, camera, config, explain=False)
+    _STATE["perception"] = Perception(camera)
+
+
+def _drive(job):
+    from monitor.offline.closed_loop import run_scenario
+
+    spec, shields = job
+    return run_scenario(spec, _STATE["perception"], _STATE["monitor"], shields)
+
+
+def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=None) -> list:
+    """Run ``(spec, shields)`` jobs, in ``workers`` processes; results in the order of ``jobs``."""
+    results = []
+    if workers == 1:
+        _init(rules, config_path, prior, camera)
+        for job in jobs:
+            results.append(_drive(job))
+            if progress is not None:
+                progress()
+        return results
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")  # no forked OpenCV/Numba threads
+    with ctx.Pool(workers, initializer=_init, initargs=(rules, config_path, prior, camera)) as pool:
+        for result in pool.imap(_drive, jobs, chunksize=1):
+            results.append(result)
+            if progress is not None:
+                progress()
+    return results
+
+
+def _write_text(path: Path, text: str) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text, encoding="utf-8")
+    os.replace(tmp, path)
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.trials < 1:
-        raise ValueError(f"--trials {args.trials}: must be >= 1")
-    scenario = Scenario(obstacle_class=args.obstacle, distance=args.distance, speed=args.speed)
-    bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=args.seed)
-    config = load_config(args.config)
-    monitor = RiskMonitor(fuzzcore.load(args.rules or shipped_rules()), bench.prior(), bench.camera, config,
-                          explain=False)
-    bar = tqdm(total=args.trials, unit="trial", desc="simulate", disable=None)
-    pairs = run_experiment(scenario, args.condition, range(args.seed, args.seed + args.trials), bench.camera,
-                           monitor, progress=bar.update)
-    bar.close()
+    targets = _check(args)
+    from monitor.offline.scenarios import require_highway_env
+
+    try:
+        require_highway_env()
+    except ImportError as exc:
+        print(f"fuzzrisk simulate: error: {exc}", file=sys.stderr)
+        return 2
+    from monitor.config import load_config
+    from monitor.offline import safety_measures as sm
+    from monitor.offline.closed_loop import driver_label
+    from monitor.report.closed_loop_figures import condition_figure, trade_off_figure, traces_figure
+    from monitor.shipped import shipped_rules
+    from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
+
+    config = load_config(args.config)  # errors before the work starts
+    rules = args.rules or str(shipped_rules())
+    if not Path(rules).is_file():
+        raise FileNotFoundError(f"--rules {rules}: no such file")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    with open(out / "trials.jsonl", "w", encoding="utf-8") as f:
-        for base, shielded in pairs:
-            for trial in (base, shielded):
-                f.write(json.dumps(asdict(trial)) + "\n")
-    _figure(pairs, config.shield.threshold, out / "simulation.png")
-    s = summarise(pairs)
+    bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=0)
+    prior = bench.prior()
+    specs = _jobs(args.kind, args.condition, args.scenarios, args.seed)
+    sweep = sweep_settings(config.shield) if args.sweep else []
+    sweep_specs = {s for s in _jobs(args.kind, args.condition, args.sweep, args.seed)}
+    default = driver_label(config.shield)
+    jobs = [(spec, [config.shield] + [c for c in sweep if spec in sweep_specs and driver_label(c) != default])
+            for spec in specs]
+    start = time.perf_counter()
+    bar = tqdm(total=len(jobs), unit="scenario", desc="simulate", disable=None)
+    results = drive_all(jobs, rules, args.config, prior, bench.camera, args.workers, bar.update)
+    bar.close()
+    seconds = time.perf_counter() - start
+
+    main_runs = [run for runs in results for run in runs[:2]]
+    all_runs = [run for runs in results for run in runs]
+    summary = sm.summarise(main_runs, default)
+    summary["seconds"] = seconds
+    summary["command"] = (f"fuzzrisk simulate --scenarios {args.scenarios} --seed {args.seed} --kind "
+                          f"{' '.join(args.kind)} --condition {' '.join(args.condition)} --sweep {args.sweep} "
+                          f"--workers {args.workers}")
+    paths = dict(zip(OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ()), targets))
+    _write_text(paths["runs.jsonl"], "".join(json.dumps(r.to_dict()) + "\n" for r in main_runs))
+    _write_text(paths["summary.json"], json.dumps(_clean(summary), indent=1) + "\n")
+    points = []
+    if args.sweep:
+        swept = [r for r in all_runs if (r.kind, r.condition, r.seed) in
+                 {(s.kind, s.condition, s.seed) for s in sweep_specs}]
+        points = sm.trade_off(swept)
+        _write_text(paths["sweep.jsonl"], "".join(json.dumps(_clean(p)) + "\n" for p in points))
+        trade_off_figure(points, default, paths["trade_off.png"])
+    _write_text(paths["summary.md"], markdown(summary, points, default, len(specs), seconds, args.workers,
+                                              SYNTHETIC_NOTE))
+    pairs = sm.pair_runs(main_runs, default)
+    shown = [p for p in pairs if p[0].collided][:4] + [p for p in pairs if p[0].kind == "hazard-free"][:1]
+    traces_figure(shown or pairs[:4], config.shield.threshold, paths["traces.png"])
+    condition_figure(summary["by_condition"], paths["conditions.png"])
     print(SYNTHETIC_NOTE)
-    print(f"scenario: {args.obstacle} {scenario.distance:g} m ahead at {scenario.speed:g} m/s, "
-          f"condition {args.condition}, {s['trials']} seeds")
-    print(f"collisions: baseline {s['baseline_collisions']}/{s['trials']}, with the shield "
-          f"{s['shielded_collisions']}/{s['trials']}; avoided {s['avoidance_rate']:.0%} of the baseline's "
-          f"collisions; {s['shield_induced']} collisions only with the shield")
-    print(f"trials and figure in {out}/")
+    print(markdown(summary, points, default, len(specs), seconds, args.workers, None))
+    print(f"runs, summary and figures in {out}/")
     return 0
 
 
-def _figure(pairs, threshold: float, path: Path) -> None:
-    fig, (ax_gap, ax_risk) = plt.subplots(1, 2, figsize=(11, 3.8))
-    for base, shielded in pairs:
-        ax_gap.plot(base.time, base.gap, color="tab:blue", alpha=0.5, lw=1)
-        ax_gap.plot(shielded.time, shielded.gap, color="tab:green", alpha=0.7, lw=1)
-        ax_risk.plot(shielded.time, shielded.risk, color="tab:green", alpha=0.5, lw=1)
-    ax_gap.plot([], [], color="tab:blue", label="baseline")
-    ax_gap.plot([], [], color="tab:green", label="with monitor + shield")
-    ax_gap.axhline(0, color="red", lw=0.8)
-    ax_gap.set(xlabel="time (s)", ylabel="gap to obstacle (m)", title="gap per trial")
-    ax_gap.legend(fontsize=8)
-    ax_risk.axhline(threshold, color="red", lw=0.8, ls=":")
-    ax_risk.set(xlabel="time (s)", ylabel="risk", ylim=(-0.02, 1.02), title="monitor risk (shielded runs)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+def _clean(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_clean(v) for v in value]
+    return value
+
+
+def _pct(value) -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.0f}%"
+
+
+def _num(value, fmt="{:.1f}") -> str:
+    return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else fmt.format(value)
+
+
+def markdown(summary: dict, points: list, default: str, n_scenarios: int, seconds: float, workers: int,
+             note: str | None) -> str:
+    """The summary as Markdown tables."""
+    lines = []
+    if note:
+        lines += ["# Closed-loop simulation", "", note, ""]
+    lines += [f"`{summary['command']}`", "",
+              f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s).", "",
+              "## Hazards (baseline collisions avoided by the shield)", "",
+              "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
+              "unavoidable | impact v (shield) | shield-only | rear-ended |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
+    rows = []
+    for kind, by_condition in summary["by_kind_condition"].items():
+        if kind == "hazard-free":
+            continue
+        for condition, m in list(by_condition.items()) + [("all", summary["by_kind"][kind])]:
+            rows.append(f"| {kind} | {condition} | {m['runs']} | {_pct(m['baseline_collision_rate'])} | "
+                        f"{_pct(m['shielded_collision_rate'])} | {_pct(m['avoidance_rate'])} | "
+                        f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']} | "
+                        f"{m['unavoidable_collisions']} ({_pct(m['avoidance_rate_unavoidable'])} avoided) | "
+                        f"{_num(m['impact_speed_shielded'])} m/s | {m['shield_only_collisions']} | "
+                        f"{m['rear_ended_shielded']} |")
+    lines += rows
+    if "hazard-free" in summary["by_kind"]:
+        lines += ["", "## Hazard-free drives (what the shield costs)", "",
+                  "| condition | runs | false-brake rate | baseline braked | time braking | shield engaged | "
+                  "added trip time | not arrived |", "|---|---|---|---|---|---|---|---|"]
+        by_condition = summary["by_kind_condition"]["hazard-free"]
+        for condition, m in list(by_condition.items()) + [("all", summary["by_kind"]["hazard-free"])]:
+            lines.append(f"| {condition} | {m['runs']} | {_pct(m['false_brake_rate'])} | "
+                         f"{_pct(m['baseline_brake_rate'])} | {_pct(m['braking_share'])} | "
+                         f"{_pct(m['engaged_share'])} | {_pct(m['added_trip_time'])} | {m['not_arrived']} |")
+    lines += ["", "## System level (Guerin et al. 2022)", "",
+              "| condition | safety gain | residual hazard | availability cost |", "|---|---|---|---|"]
+    for condition, m in summary["by_condition"].items():
+        g = m["guerin"]
+        lines.append(f"| {condition} | {_num(g['safety_gain'], '{:.3f}')} | {_num(g['residual_hazard'], '{:.3f}')} | "
+                     f"{_num(g['availability_cost'], '{:.3f}')} |")
+    g = summary["overall"]["guerin"]
+    lines.append(f"| all | {_num(g['safety_gain'], '{:.3f}')} | {_num(g['residual_hazard'], '{:.3f}')} | "
+                 f"{_num(g['availability_cost'], '{:.3f}')} |")
+    if points:
+        lines += ["", "## Shield settings (sweep)", "",
+                  "| setting | avoidance | avoidance (avoidable) | false-brake rate | added trip time |",
+                  "|---|---|---|---|---|"]
+        for p in points:
+            mark = " (default)" if p["driver"] == default else ""
+            lines.append(f"| `{p['driver']}`{mark} | {_pct(p['avoidance_rate'])} | "
+                         f"{_pct(p['avoidance_rate_avoidable'])} | {_pct(p['false_brake_rate'])} | "
+                         f"{_pct(p['added_trip_time'])} |")
+    return "\n".join(lines) + "\n"

@@ -13,12 +13,22 @@ The tuned system is written as YAML, named after the output file, with
 ``metadata.tuning`` saying how it was made (method, settings, seed, the starting rule
 base, data file and its SHA-256, rows skipped, scores, this command).
 With ``--test`` the metric on a held-out table is reported and recorded as well.
+
+Paths in the metadata (the data files, and those in the recorded command) are written so
+that they mean the same on another machine: relative to the folder the command runs in
+(the project) when the file is inside it, as given when given relative, and otherwise by
+file name only; the SHA-256 identifies the data whatever its path.
+
+The output is checked before any work (a known extension, an existing folder, not one of
+the files read, not an existing file unless ``--overwrite``), and written whole or not at
+all (:func:`fuzzcore.io.write_text_atomic`).
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
 import hashlib
+import os
 import time
 from pathlib import Path
 
@@ -26,6 +36,7 @@ import numpy as np
 from tqdm import tqdm
 
 import fuzzcore
+from fuzzcore.io import check_save_path
 from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
 
 HELP = "tune a rule base on a feature table: membership functions (patternsearch), rules (pso) or both (joint)"
@@ -39,6 +50,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--method", required=True, choices=METHODS, help="what to tune")
     parser.add_argument("--rules", required=True, metavar="RULES.yaml", help="starting rule base")
     parser.add_argument("-o", "--output", required=True, metavar="OUT.yaml", help="where to write the tuned system")
+    parser.add_argument("--overwrite", action="store_true", help="replace OUT.yaml if it exists")
     parser.add_argument("--test", metavar="TEST.csv", help="held-out feature table to report the metric on")
     parser.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
     parser.add_argument("--metric", choices=("rmse", "mae"), default="rmse", help="objective (default %(default)s)")
@@ -61,12 +73,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     pso.add_argument("--allow-off", action="store_true", help="rules may be switched off")
 
 
+def recorded_path(path: str) -> str:
+    """``path`` as the metadata records it (module docstring): relative to the working
+    directory when inside it, as given when relative, else the file name; ``/`` separators."""
+    given = Path(path)
+    resolved, here = given.resolve(), Path.cwd().resolve()
+    if resolved == here or here in resolved.parents:
+        return resolved.relative_to(here).as_posix()
+    return given.as_posix() if not given.is_absolute() else given.name
+
+
 def _command(args: argparse.Namespace) -> str:
-    """The command line, normalised (every option that applies, at its value)."""
-    parts = ["fuzzrisk tune", f"--features {_recorded(args.features)}", f"--method {args.method}",
-             f"--rules {_recorded(args.rules)}", f"-o {_recorded(args.output)}"]
+    """The command line, normalised (every option that applies, at its value; paths as recorded)."""
+    parts = ["fuzzrisk tune", f"--features {recorded_path(args.features)}", f"--method {args.method}",
+             f"--rules {recorded_path(args.rules)}", f"-o {recorded_path(args.output)}"]
     if args.test:
-        parts.append(f"--test {_recorded(args.test)}")
+        parts.append(f"--test {recorded_path(args.test)}")
     parts += [f"--seed {args.seed}", f"--metric {args.metric}"]
     if args.method != "pso":
         parts += [f"--folds {args.folds}", f"--max-iter {args.max_iter}"]
@@ -81,16 +103,6 @@ def _command(args: argparse.Namespace) -> str:
         if args.allow_off:
             parts.append("--allow-off")
     return " ".join(parts)
-
-
-def _recorded(path: str) -> str:
-    """``path`` as recorded in the metadata: relative to the current folder when inside it
-    (a rule file must not carry this machine's absolute paths)."""
-    resolved = Path(path).resolve()
-    try:
-        return resolved.relative_to(Path.cwd().resolve()).as_posix()
-    except ValueError:
-        return path
 
 
 def _sha256(path: str) -> str:
@@ -110,6 +122,8 @@ def _describe(table) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    read = [args.rules, args.features] + ([args.test] if args.test else [])
+    check_save_path(args.output, read, overwrite=args.overwrite, overwrite_hint="--overwrite")
     system = fuzzcore.load(args.rules)
     train = read_csv(args.features, system.input_names, args.target, args.group)
     test = read_csv(args.test, system.input_names, args.target, args.group) if args.test else None
@@ -149,11 +163,11 @@ def run(args: argparse.Namespace) -> int:
     result = tuner.result_
 
     tuning = dict(tuner.system_.metadata["tuning"])
-    tuning["data"] = {**tuning["data"], "file": _recorded(args.features), "sha256": _sha256(args.features),
+    tuning["data"] = {**tuning["data"], "file": recorded_path(args.features), "sha256": _sha256(args.features),
                       "skipped_no_target": train.n_no_target, "skipped_no_features": train.n_no_features}
     if test is not None:
         initial_test, final_test = _score(system, test, args.metric), _score(tuner.system_, test, args.metric)
-        tuning["test"] = {"file": _recorded(args.test), "sha256": _sha256(args.test), "n_samples": len(test),
+        tuning["test"] = {"file": recorded_path(args.test), "sha256": _sha256(args.test), "n_samples": len(test),
                           "initial": initial_test, "final": final_test}
     tuning["command"] = _command(args)
     tuned = dataclasses.replace(tuner.system_, name=Path(args.output).stem,

@@ -1,0 +1,428 @@
+"""The monitor and its shield in a closed loop with traffic (paper, Sec. IV-B).
+
+Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
+
+1. the actors become ego-frame boxes; :func:`~monitor.synthetic.render_depth` ray-casts
+   them and the street's structure, the front camera's true depth;
+   :func:`~monitor.synthetic.degrade.estimate_depth` and
+   :func:`~monitor.synthetic.degrade.detect` degrade it and the detections under the
+   scenario's condition;
+2. the **baseline** driver brakes at ``brake`` m/s^2 when a detection (score >= ``min_score``)
+   lies in its corridor within its stopping distance plus a margin in ``confirm_frames``
+   consecutive frames (it sees only what its detector sees; one frame is not enough, as a
+   tracker confirms a track) and keeps braking until nothing was in reach for
+   ``release_frames`` frames (a track coasts through missed detections); otherwise it
+   accelerates back to its cruise speed at ``comfort``;
+3. a **shielded** driver is the same driver plus the :class:`~monitor.RiskMonitor` on the same
+   frame and a :class:`~monitor.shield.Shield`: the larger of the two decelerations wins;
+4. a command takes effect ``reaction`` seconds later (perception, decision and actuation).
+
+Drivers in one scenario (the baseline, the default shield, a sweep's settings) share the
+world and its frames for as long as their commands agree; where they part, the world is
+copied and each copy goes on with its drivers (:func:`run_scenario`). Frame ``k`` draws its
+depth and detector errors from the ``k``-th child of the seed's stream in every copy, so two
+drivers see the same noise in the same situation.
+
+A run ends at a collision (of the ego's front: the hazard or whatever it hits; or the rear:
+the follower), when the ego stops or has passed the hazard (hazard kinds), when it arrives at
+the end of its route (hazard-free drives), or at the time limit.
+
+Avoidability (:func:`required_gap`): the hazard's *onset* is the first frame at which it can
+be seen (visible pixels in the image, within the monitor's range, and after its event: the
+lead's braking, the cut-in, the pedestrian's first step). A run is physically avoidable by
+the shield when the gap at onset exceeds what the ego needs to stop at the shield's
+deceleration after the reaction time, the hazard moving on as it does.
+"""
+from __future__ import annotations
+
+import copy
+import math
+from collections import deque
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from monitor.config import ShieldConfig
+from monitor.geometry.camera import Camera
+from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
+from monitor.risk_monitor import RiskMonitor
+from monitor.shield import Shield
+from monitor.synthetic import Condition, get_condition, render_depth
+from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, detect, estimate_depth
+from monitor.synthetic.scene import EGO_FRONT_M, EGO_HALF_WIDTH_M
+
+BASELINE = "baseline"
+
+
+@dataclass(frozen=True)
+class Driver:
+    """The ego's driver, the same with and without the shield.
+
+    Attributes
+    ----------
+    dt : float
+        Seconds per step (one camera frame per step).
+    reaction : float
+        Seconds from a frame to the command taking effect; a whole number of steps.
+    brake : float
+        The baseline's deceleration for a detected obstacle, m/s^2.
+    comfort : float
+        Acceleration back to the cruise speed, m/s^2.
+    margin : float
+        Metres kept beyond the stopping distance.
+    corridor : float
+        Half width of the ego's path in which a detection counts, metres.
+    confirm_frames : int
+        Consecutive frames with a detection in reach before the baseline brakes.
+    release_frames : int
+        Consecutive frames without one before it stops braking.
+    min_score : float
+        Detections scoring below it are ignored.
+    """
+
+    dt: float = 0.1
+    reaction: float = 0.2
+    brake: float = 6.0
+    comfort: float = 1.5
+    margin: float = 2.0
+    corridor: float = EGO_HALF_WIDTH_M + 0.3
+    confirm_frames: int = 2
+    release_frames: int = 5
+    min_score: float = 0.3
+
+    def __post_init__(self):
+        for name in ("dt", "brake", "comfort", "corridor"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} = {value!r}, must be a finite number > 0")
+        for name in ("reaction", "margin"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} = {value!r}, must be a finite number >= 0")
+        steps = self.reaction / self.dt
+        if abs(steps - round(steps)) > 1e-9:
+            raise ValueError(f"reaction = {self.reaction} s, must be a whole number of steps of dt = {self.dt} s")
+        for name in ("confirm_frames", "release_frames"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"{name} = {value!r}, must be an integer >= 1")
+        if not 0.0 <= self.min_score <= 1.0:
+            raise ValueError(f"min_score = {self.min_score!r}, must be in [0, 1]")
+
+    @property
+    def delay_steps(self) -> int:
+        return int(round(self.reaction / self.dt))
+
+
+def stopping_distance(speed: float, decel: float, reaction: float) -> float:
+    """Metres from a decision to standstill: ``speed * reaction + speed^2 / (2 decel)``."""
+    return speed * reaction + speed * speed / (2.0 * decel)
+
+
+def required_gap(speed: float, decel: float, reaction: float, hazard_speed: float = 0.0,
+                 hazard_decel: float = 0.0) -> float:
+    """The smallest gap at which the ego stops short of a hazard ahead in its path, metres.
+
+    The ego drives on at ``speed`` for ``reaction`` s, then brakes at ``decel`` to a stop;
+    the hazard moves along the path at ``hazard_speed``, braking at ``hazard_decel`` to a
+    stop (0: at a constant speed). The answer is the largest amount by which the ego's
+    travel exceeds the hazard's, 0 if it never does (a static hazard: exactly
+    :func:`stopping_distance`).
+    """
+    t_stop = reaction + speed / decel
+    t = np.linspace(0.0, t_stop, 4001)
+    braking = np.clip(t - reaction, 0.0, None)
+    ego = speed * np.minimum(t, reaction) + speed * braking - 0.5 * decel * braking ** 2
+    if hazard_decel > 0.0:
+        moving = np.minimum(t, hazard_speed / hazard_decel)
+        other = hazard_speed * moving - 0.5 * hazard_decel * moving ** 2
+    else:
+        other = hazard_speed * t
+    return float(max(np.max(ego - other), 0.0))
+
+
+def in_reach(detections: np.ndarray, scores: np.ndarray, speed: float, driver: Driver) -> bool:
+    """Is a detection (score >= ``min_score``) in the corridor within the stopping distance
+    plus the margin? Boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin)."""
+    boxes = detections[scores >= driver.min_score]
+    if boxes.shape[0] == 0:
+        return False
+    w, l, yaw = boxes[:, 3], boxes[:, 4], boxes[:, 6]
+    half_x = 0.5 * (np.abs(np.cos(yaw)) * l + np.abs(np.sin(yaw)) * w)  # extent along the road
+    half_y = 0.5 * (np.abs(np.sin(yaw)) * l + np.abs(np.cos(yaw)) * w)  # and across it
+    ahead = boxes[:, 0] - half_x - EGO_FRONT_M
+    in_path = np.abs(boxes[:, 1]) < driver.corridor + half_y
+    limit = reach(speed, driver.brake, driver.reaction, driver.margin)
+    return bool(np.any(in_path & (ahead > -1.0) & (ahead < limit)))
+
+
+@dataclass
+class Run:
+    """One driver's drive through one scenario.
+
+    Attributes
+    ----------
+    kind, condition : str
+    seed : int
+    driver : str
+        ``"baseline"`` or the shield's settings, ``"t0.50 r0.50 h0"``.
+    regime : str
+        ``parking`` or ``urban``.
+    cruise : float
+        m/s.
+    outcome : str
+        ``collision`` (the ego's front hit something), ``rear-ended``, ``stopped``, ``passed``,
+        ``arrived`` or ``timeout``.
+    hit : str
+        Class of what the ego hit ("" if nothing).
+    impact_speed, closing_speed : float
+        The ego's speed and the speed at which it closed in on what it hit, m/s (0 without).
+    final_gap : float
+        Gap to the hazard when the run ended, metres (0 at a collision with it; NaN without).
+    trip_time : float
+        Seconds to the end of the route (hazard-free drives; the time limit if it never
+        arrived; NaN for hazard kinds).
+    frames : int
+    braking_frames : int
+        Frames in which a deceleration was applied.
+    engaged_frames : int
+        Frames in which the shield was engaged.
+    onset : dict or None
+        At the hazard's onset (computed on the baseline's drive): ``time``, ``gap``, ``speed``,
+        ``required`` (the gap the shield's deceleration needs) and ``avoidable``.
+    history : dict of lists
+        Per frame: ``time``, ``speed``, ``gap`` (to the hazard, NaN without), ``risk`` (NaN for
+        the baseline), ``engaged``, ``decel`` (applied, m/s^2).
+    """
+
+    kind: str
+    condition: str
+    seed: int
+    driver: str
+    regime: str
+    cruise: float
+    outcome: str = "timeout"
+    hit: str = ""
+    impact_speed: float = 0.0
+    closing_speed: float = 0.0
+    final_gap: float = float("nan")
+    trip_time: float = float("nan")
+    frames: int = 0
+    braking_frames: int = 0
+    engaged_frames: int = 0
+    onset: dict | None = None
+    history: dict = field(default_factory=lambda: {k: [] for k in HISTORY_KEYS})
+
+    @property
+    def collided(self) -> bool:
+        return self.outcome == "collision"
+
+    def to_dict(self) -> dict:
+        """JSON-ready (NaN as None)."""
+        def clean(value):
+            if isinstance(value, float) and not math.isfinite(value):
+                return None
+            if isinstance(value, dict):
+                return {k: clean(v) for k, v in value.items()}
+            if isinstance(value, list):
+                return [clean(v) for v in value]
+            return value
+        return clean(asdict(self))
+
+
+HISTORY_KEYS = ("time", "speed", "gap", "risk", "engaged", "decel")
+
+
+def driver_label(config: ShieldConfig | None) -> str:
+    """``baseline`` or ``t{threshold} r{release} h{hold_frames}``."""
+    if config is None:
+        return BASELINE
+    return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}"
+
+
+class Perception:
+    """The front camera's frames of a world: true depth, estimated depth, detections.
+
+    Parameters
+    ----------
+    camera : Camera
+    """
+
+    def __init__(self, camera: Camera):
+        if not isinstance(camera, Camera):
+            raise ValueError(f"camera is a {type(camera).__name__}, expected a monitor.geometry.camera.Camera")
+        self.camera = camera
+        self.px_scale = camera.width / REFERENCE_WIDTH_PX
+
+    def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]):
+        """(estimated depth, detections, hazard visible pixels, hazard camera distance).
+
+        ``seeds`` seed the depth errors and the detector errors; a generator is made afresh
+        from each, so the same seeds give the same errors every time.
+        """
+        boxes, classes, hazard_row = world.frame_boxes()
+        render = render_depth(self.camera, boxes, *world.frame_structure())
+        depth_rng, detector_rng = (np.random.default_rng(s) for s in seeds)
+        depth = estimate_depth(render.depth, render.labels, render.background, condition.depth, depth_rng,
+                               self.px_scale)
+        dets = detect(self.camera, boxes, classes, render.visibility, render.visible_px, condition.detector,
+                      detector_rng)
+        visible, distance = 0, float("inf")
+        if hazard_row >= 0:
+            visible = int(render.visible_px[hazard_row])
+            distance = float(np.linalg.norm(boxes[hazard_row, :3] - self.camera.cam_to_ego[:3, 3]))
+        return depth, dets, visible, distance
+
+
+class _Member:
+    """One driver's state inside a branch."""
+
+    def __init__(self, run: Run, shield: Shield | None, delay: int):
+        self.run, self.shield = run, shield
+        self.confirmed = self.missed = 0
+        self.braking = False
+        self.queue = deque([0.0] * delay)  # commands on their way to the brakes
+
+
+def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonitor | None,
+                 shields=(), driver: Driver = Driver(), condition: Condition | None = None) -> list[Run]:
+    """Drive one scenario with the baseline and with each shield setting.
+
+    Parameters
+    ----------
+    spec : ScenarioSpec
+    perception : Perception
+    monitor : RiskMonitor or None
+        Needed when ``shields`` is not empty; its camera must be the perception's.
+    shields : sequence of ShieldConfig
+    driver : Driver
+    condition : Condition, optional
+        Degradations to use instead of those named by ``spec.condition`` (a variant).
+
+    Returns
+    -------
+    list of Run
+        The baseline first, then one per shield setting, in order.
+    """
+    shields = list(shields)
+    if shields and monitor is None:
+        raise ValueError("shield settings were given without a monitor")
+    if monitor is not None and monitor.camera is not perception.camera and \
+            (monitor.camera.width, monitor.camera.height) != (perception.camera.width, perception.camera.height):
+        raise ValueError("the monitor's camera and the perception's differ in image size")
+    condition = get_condition(spec.condition) if condition is None else get_condition(condition)
+    max_range = monitor.config.max_range if monitor is not None else DEFAULT_RANGE_M
+    shield_decel = (monitor.config.shield if monitor is not None else ShieldConfig()).deceleration
+    world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
+    configs = [None] + shields
+    members = [_Member(Run(spec.kind, spec.condition, int(spec.seed), driver_label(c), world.regime,
+                           world.speed), Shield(c) if c is not None else None, driver.delay_steps)
+               for c in configs]
+    n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
+    # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
+    streams = [seq.spawn(2) for seq in np.random.SeedSequence([int(spec.seed), 1]).spawn(n_steps)]
+    branches = [(world, members)]
+    onset = None
+    for step in range(n_steps):
+        next_branches = []
+        for world, group in branches:
+            depth, dets, visible, distance = perception.frame(world, condition, streams[step])
+            risk = float("nan")
+            if any(m.shield is not None for m in group):
+                risk = monitor.step(depth, dets.boxes3d, dets.scores).risk
+            hazard = world.hazard
+            if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
+                    and world.time >= hazard.onset - 1e-9 and distance <= max_range:
+                onset = _onset(world, driver, shield_decel)
+            seen = in_reach(dets.boxes3d, dets.scores, world.ego.speed, driver)
+            parts: dict[tuple, list] = {}
+            for m in group:
+                m.confirmed, m.missed = (m.confirmed + 1, 0) if seen else (0, m.missed + 1)
+                if m.confirmed >= driver.confirm_frames:
+                    m.braking = True
+                elif m.missed >= driver.release_frames:
+                    m.braking = False
+                decel = driver.brake if m.braking else 0.0
+                engaged = False
+                if m.shield is not None:
+                    decision = m.shield.update(risk)
+                    engaged, decel = decision.engaged, max(decel, decision.deceleration)
+                m.queue.append(-decel if decel > 0 else driver.comfort)
+                applied = m.queue.popleft()
+                h = m.run.history
+                for key, value in zip(HISTORY_KEYS, (world.time, world.ego.speed, world.hazard_gap(),
+                                                     risk if m.shield is not None else float("nan"),
+                                                     engaged, max(-applied, 0.0))):
+                    h[key].append(value)
+                m.run.frames += 1
+                m.run.braking_frames += applied < 0
+                m.run.engaged_frames += engaged
+                parts.setdefault((applied,) + tuple(m.queue), []).append(m)
+            for k, (key, part) in enumerate(parts.items()):
+                branch_world = world if k == len(parts) - 1 else copy.deepcopy(world)
+                if _advance(branch_world, key[0], part, driver):
+                    next_branches.append((branch_world, part))
+        branches = next_branches
+        if not branches:
+            break
+    for world, group in branches:  # out of time
+        for m in group:
+            _finish(m.run, world, "timeout")
+    runs = [m.run for m in members]
+    for run in runs:
+        run.onset = onset
+    return runs
+
+
+def _onset(world: World, driver: Driver, decel: float) -> dict:
+    hazard = world.hazard
+    speed_along = float(hazard.actor.speed * math.cos(hazard.actor.heading))
+    need = required_gap(world.ego.speed, decel, driver.reaction, max(speed_along, 0.0), hazard.decel)
+    gap = world.hazard_gap()
+    return {"time": world.time, "gap": gap, "speed": float(world.ego.speed), "required": need,
+            "avoidable": bool(gap > need)}
+
+
+def _advance(world: World, command: float, group: list[_Member], driver: Driver) -> bool:
+    """Step the branch's world with the applied command; False when its runs have ended."""
+    world.ego.command = command
+    hit = world.collision(driver.dt)
+    if hit is not None:
+        actor, fraction = hit
+        _, speed = advance(world.ego.speed, command, fraction * driver.dt, world.ego.cruise)
+        ahead = actor.position[0] > world.ego.position[0]
+        closing = speed - actor.speed * math.cos(actor.heading)
+        for m in group:
+            run = m.run
+            run.outcome = "collision" if ahead else "rear-ended"
+            run.hit, run.impact_speed, run.closing_speed = actor.actor_class, float(speed), float(abs(closing))
+            run.final_gap = 0.0 if world.hazard is not None and actor is world.hazard.actor else world.hazard_gap()
+            if world.hazard is None:
+                run.trip_time = world.max_time
+        return False
+    before = world.ego.position[0] - EGO_CENTRE_M  # metres of the route covered
+    world.step(driver.dt)
+    if world.hazard is None:
+        after = world.ego.position[0] - EGO_CENTRE_M
+        if after >= world.route:
+            fraction = (world.route - before) / (after - before)  # of the step, when it arrived
+            for m in group:
+                m.run.trip_time = world.time - driver.dt * (1.0 - fraction)
+                _finish(m.run, world, "arrived")
+            return False
+    elif world.ego.speed <= 0.0:
+        for m in group:
+            _finish(m.run, world, "stopped")
+        return False
+    elif world.hazard_passed():
+        for m in group:
+            _finish(m.run, world, "passed")
+        return False
+    return True
+
+
+def _finish(run: Run, world: World, outcome: str) -> None:
+    run.outcome, run.final_gap = outcome, world.hazard_gap()
+    if world.hazard is None and outcome == "timeout":
+        run.trip_time = world.max_time

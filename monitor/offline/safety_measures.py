@@ -1,0 +1,168 @@
+"""What the shield buys and what it costs, from closed-loop runs (:mod:`monitor.offline.closed_loop`).
+
+Per group of scenarios (a kind, a condition, or both), pairing each shielded run with the
+baseline run of the same scenario:
+
+- hazard kinds: the baseline's and the shielded collision rates; the **avoidance rate**,
+  baseline collisions the shield avoided / baseline collisions, over all of them and apart
+  over the physically avoidable ones (:func:`~monitor.offline.closed_loop.required_gap` at
+  the hazard's onset) and the unavoidable ones; the mean impact speed of the collisions
+  left; collisions only the shielded car had; rear-end collisions;
+- hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
+  the share of time spent braking and the **added trip time** (relative to the baseline's
+  trip over the same route).
+
+System-level measures after Guerin, Ferreira, Delmas and Guiochet, "Unifying Evaluation of
+Machine Learning Safety Monitors" (ISSRE 2022, arXiv:2208.14660). They define a monitor's
+**safety gain** (the hazard it removes), **residual hazard** (what remains with it) and
+**availability cost** (the reward the system loses to its interventions) from two return
+functions, a hazard return and a reward return, that each application must state. Ours: the
+hazard return of a run is 1 for a collision of the ego's front (0 otherwise), the reward
+return is the route covered per second (progress rate). Then, over the runs of a group,
+
+- safety gain ``SG = mean(h_baseline) - mean(h_shielded)``,
+- residual hazard ``RH = mean(h_shielded)``,
+- availability cost ``AC = 1 - mean(r_shielded) / mean(r_baseline)`` over the hazard-free
+  drives (the only runs whose reward does not depend on whether a hazard was struck).
+"""
+from __future__ import annotations
+
+from collections import defaultdict
+
+import numpy as np
+
+from monitor.offline.closed_loop import BASELINE, Run
+from monitor.offline.scenarios import HAZARD_KINDS
+
+
+def pair_runs(runs: list[Run], driver: str) -> list[tuple[Run, Run]]:
+    """(baseline, ``driver``) run pairs of the same scenario, in the order of ``runs``.
+
+    Raises ValueError when a scenario lacks one of the two.
+    """
+    by_scenario: dict[tuple, dict[str, Run]] = defaultdict(dict)
+    for run in runs:
+        by_scenario[(run.kind, run.condition, run.seed)][run.driver] = run
+    pairs = []
+    for key, drivers in by_scenario.items():
+        if BASELINE not in drivers or driver not in drivers:
+            raise ValueError(f"scenario {key} has drivers {sorted(drivers)}; expected {BASELINE!r} and {driver!r}")
+        pairs.append((drivers[BASELINE], drivers[driver]))
+    return pairs
+
+
+def _rate(numerator: int, denominator: int) -> float:
+    return numerator / denominator if denominator else float("nan")
+
+
+def _mean(values) -> float:
+    values = list(values)
+    return float(np.mean(values)) if values else float("nan")
+
+
+def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
+    """Collision and avoidance measures of (baseline, shielded) pairs of hazard scenarios."""
+    n = len(pairs)
+    base_hits = [(b, s) for b, s in pairs if b.collided]
+    avoidable = [(b, s) for b, s in base_hits if b.onset is not None and b.onset["avoidable"]]
+    unavoidable = [(b, s) for b, s in base_hits if not (b.onset is not None and b.onset["avoidable"])]
+    avoided = lambda group: sum(not s.collided for _, s in group)  # noqa: E731
+    return {
+        "runs": n,
+        "baseline_collisions": len(base_hits),
+        "shielded_collisions": sum(s.collided for _, s in pairs),
+        "baseline_collision_rate": _rate(len(base_hits), n),
+        "shielded_collision_rate": _rate(sum(s.collided for _, s in pairs), n),
+        "avoidance_rate": _rate(avoided(base_hits), len(base_hits)),
+        "avoidable_collisions": len(avoidable),
+        "avoidance_rate_avoidable": _rate(avoided(avoidable), len(avoidable)),
+        "unavoidable_collisions": len(unavoidable),
+        "avoidance_rate_unavoidable": _rate(avoided(unavoidable), len(unavoidable)),
+        "impact_speed_baseline": _mean(b.impact_speed for b, _ in base_hits),
+        "impact_speed_shielded": _mean(s.impact_speed for _, s in pairs if s.collided),
+        "shield_only_collisions": sum(s.collided and not b.collided for b, s in pairs),
+        "rear_ended_shielded": sum(s.outcome == "rear-ended" for _, s in pairs),
+        "rear_ended_baseline": sum(b.outcome == "rear-ended" for b, _ in pairs),
+    }
+
+
+def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
+    """False braking and trip time of (baseline, shielded) pairs of hazard-free drives."""
+    n = len(pairs)
+    frames = sum(s.frames for _, s in pairs)
+    return {
+        "runs": n,
+        "false_brake_rate": _rate(sum(s.engaged_frames > 0 for _, s in pairs), n),
+        "baseline_brake_rate": _rate(sum(b.braking_frames > 0 for b, _ in pairs), n),
+        "braking_share": _rate(sum(s.braking_frames for _, s in pairs), frames),
+        "engaged_share": _rate(sum(s.engaged_frames for _, s in pairs), frames),
+        "added_trip_time": _mean(s.trip_time / b.trip_time - 1.0 for b, s in pairs),
+        "not_arrived": sum(s.outcome != "arrived" for _, s in pairs),
+    }
+
+
+def guerin_measures(pairs: list[tuple[Run, Run]]) -> dict:
+    """Safety gain, residual hazard and availability cost (module docstring) of run pairs."""
+    hazard_b = [float(b.collided) for b, _ in pairs]
+    hazard_s = [float(s.collided) for _, s in pairs]
+    drives = [(b, s) for b, s in pairs if b.kind not in HAZARD_KINDS]
+    reward_b = _mean(1.0 / b.trip_time for b, _ in drives)
+    reward_s = _mean(1.0 / s.trip_time for _, s in drives)
+    return {
+        "safety_gain": _mean(hazard_b) - _mean(hazard_s) if pairs else float("nan"),
+        "residual_hazard": _mean(hazard_s),
+        "availability_cost": 1.0 - reward_s / reward_b if drives else float("nan"),
+    }
+
+
+def summarise(runs: list[Run], driver: str) -> dict:
+    """Every measure for one shielded driver against the baseline.
+
+    Returns
+    -------
+    dict
+        ``by_kind``: kind -> measures over all its conditions; ``by_kind_condition``: kind ->
+        condition -> measures; ``by_condition``: condition -> {"hazard": ..., "guerin": ...};
+        ``overall``: {"hazard", "availability", "guerin"} over every run.
+    """
+    pairs = pair_runs(runs, driver)
+    kinds = list(dict.fromkeys(b.kind for b, _ in pairs))
+    conditions = list(dict.fromkeys(b.condition for b, _ in pairs))
+
+    def measures(group, kind):
+        return hazard_measures(group) if kind in HAZARD_KINDS else availability_measures(group)
+
+    by_kind = {k: measures([p for p in pairs if p[0].kind == k], k) for k in kinds}
+    by_kind_condition = {k: {c: measures(g, k) for c in conditions
+                             if (g := [p for p in pairs if p[0].kind == k and p[0].condition == c])}
+                         for k in kinds}
+    hazards = [p for p in pairs if p[0].kind in HAZARD_KINDS]
+    drives = [p for p in pairs if p[0].kind not in HAZARD_KINDS]
+    by_condition = {c: {"hazard": hazard_measures([p for p in hazards if p[0].condition == c]),
+                        "guerin": guerin_measures([p for p in pairs if p[0].condition == c])}
+                    for c in conditions}
+    return {
+        "driver": driver,
+        "by_kind": by_kind,
+        "by_kind_condition": by_kind_condition,
+        "by_condition": by_condition,
+        "overall": {"hazard": hazard_measures(hazards), "availability": availability_measures(drives),
+                    "guerin": guerin_measures(pairs)},
+    }
+
+
+def trade_off(runs: list[Run]) -> list[dict]:
+    """Per shield setting: avoidance rate (hazard kinds, over avoidable baseline collisions
+    and over all) against false-brake rate and added trip time (hazard-free drives)."""
+    drivers = list(dict.fromkeys(r.driver for r in runs if r.driver != BASELINE))
+    points = []
+    for driver in drivers:
+        pairs = pair_runs(runs, driver)
+        hazard = hazard_measures([p for p in pairs if p[0].kind in HAZARD_KINDS])
+        drives = availability_measures([p for p in pairs if p[0].kind not in HAZARD_KINDS])
+        points.append({"driver": driver, "avoidance_rate": hazard["avoidance_rate"],
+                       "avoidance_rate_avoidable": hazard["avoidance_rate_avoidable"],
+                       "false_brake_rate": drives["false_brake_rate"],
+                       "added_trip_time": drives["added_trip_time"]})
+    return points
+

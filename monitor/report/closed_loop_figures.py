@@ -1,0 +1,112 @@
+"""Figures of the closed-loop simulation (:mod:`monitor.offline.closed_loop`): PNG files.
+
+- :func:`traces_figure`: speed, gap to the hazard and risk over time for a few scenarios,
+  the baseline and the shielded car side by side;
+- :func:`trade_off_figure`: avoidance against false braking, one point per shield setting,
+  the default marked;
+- :func:`condition_figure`: collision rates and avoidance per condition.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from monitor.offline.closed_loop import BASELINE  # noqa: E402
+
+
+def _save(fig, path: Path) -> None:
+    """Write beside the target, then replace it (never a half-written file)."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp.png")
+    fig.savefig(tmp, dpi=80)
+    plt.close(fig)
+    tmp.replace(path)
+
+
+def traces_figure(pairs, threshold: float, path: Path) -> None:
+    """Speed, gap and risk over time.
+
+    Parameters
+    ----------
+    pairs : list of (Run, Run)
+        (baseline, shielded) runs of the scenarios to draw (a handful).
+    threshold : float
+        The shield's threshold, drawn on the risk panel.
+    path : Path
+    """
+    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for k, (base, shielded) in enumerate(pairs):
+        colour = colours[k % len(colours)]
+        label = f"{base.kind} {base.condition} #{base.seed}"
+        for run, style in ((base, ":"), (shielded, "-")):
+            h = run.history
+            axes[0].plot(h["time"], h["speed"], style, color=colour, lw=1.2, label=label if run is base else None)
+            axes[1].plot(h["time"], h["gap"], style, color=colour, lw=1.2)
+        axes[2].plot(shielded.history["time"], shielded.history["risk"], color=colour, lw=1)
+    axes[0].set(xlabel="time (s)", ylabel="speed (m/s)", title="speed (dotted: baseline, solid: shield)")
+    axes[1].axhline(0, color="red", lw=0.8)
+    axes[1].set(xlabel="time (s)", ylabel="gap to the hazard (m)", title="gap")
+    axes[2].axhline(threshold, color="red", lw=0.8, ls=":")
+    axes[2].set(xlabel="time (s)", ylabel="risk", ylim=(-0.02, 1.02), title="monitor risk (shielded car)")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
+    """Avoidance rate against false-brake rate, one point per shield setting.
+
+    Parameters
+    ----------
+    points : list of dict
+        :func:`monitor.offline.safety_measures.trade_off`.
+    default : str
+        Label of the default setting (marked).
+    path : Path
+    """
+    fig, ax = plt.subplots(figsize=(6.5, 5))
+    for point in points:
+        x, y = point["false_brake_rate"], point["avoidance_rate"]
+        if not (np.isfinite(x) and np.isfinite(y)):  # no drives or no collisions to measure on
+            continue
+        if point["driver"] == default:
+            ax.plot(x, y, "r*", ms=16, zorder=3, label=f"default {default}")
+        ax.plot(x, y, "o", color="tab:blue", ms=5)
+        ax.annotate(point["driver"], (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points")
+    ax.axvline(0.05, color="grey", lw=0.8, ls=":")
+    ax.axhline(0.95, color="grey", lw=0.8, ls=":")
+    ax.set(xlabel="false-brake rate (hazard-free drives the shield braked in)",
+           ylabel="avoidance rate (baseline collisions avoided)", xlim=(-0.02, 1.02), ylim=(-0.02, 1.02),
+           title="shield settings: safety against availability")
+    ax.legend(fontsize=8, loc="lower right")
+    fig.tight_layout()
+    _save(fig, path)
+
+
+def condition_figure(by_condition: dict, path: Path) -> None:
+    """Baseline and shielded collision rates, and avoidance, per condition (hazard kinds).
+
+    Parameters
+    ----------
+    by_condition : dict
+        ``summarise(...)["by_condition"]``.
+    path : Path
+    """
+    names = list(by_condition)
+    x = np.arange(len(names))
+    get = lambda key: [by_condition[c]["hazard"][key] for c in names]  # noqa: E731
+    fig, ax = plt.subplots(figsize=(8, 4))
+    ax.bar(x - 0.27, get("baseline_collision_rate"), 0.27, label="baseline collision rate", color="tab:red")
+    ax.bar(x, get("shielded_collision_rate"), 0.27, label="shielded collision rate", color="tab:green")
+    ax.bar(x + 0.27, np.nan_to_num(get("avoidance_rate")), 0.27, label="avoidance rate", color="tab:blue")
+    ax.set_xticks(x, names)
+    ax.set(ylim=(0, 1.05), ylabel="rate", title=f"hazard scenarios by condition ({BASELINE} vs shield)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _save(fig, path)

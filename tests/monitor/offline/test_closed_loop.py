@@ -1,0 +1,179 @@
+"""The closed loop with traffic: stopping distances by hand, detected and unseen obstacles,
+reproducibility, serial against parallel, and the measures on hand-made runs."""
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+pytest.importorskip("highway_env", reason="the closed loop needs the 'sim' extra (highway-env)")
+
+import fuzzcore  # noqa: E402
+from monitor.config import load_config  # noqa: E402
+from monitor.depth.prior import build_prior  # noqa: E402
+from monitor.geometry.camera import Camera  # noqa: E402
+from monitor.offline import safety_measures as sm  # noqa: E402
+from monitor.offline.closed_loop import (  # noqa: E402
+    BASELINE, Driver, Perception, Run, required_gap, run_scenario, stopping_distance,
+)
+from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
+from monitor.risk_monitor import RiskMonitor  # noqa: E402
+from monitor.shipped import shipped_rules  # noqa: E402
+from monitor.synthetic import generate_frames, get_condition  # noqa: E402
+from monitor.synthetic.conditions import DETECTOR_CLASSES, DetectorClass  # noqa: E402
+
+NOMINAL = get_condition("nominal")
+_EXACT_DETECTOR = replace(
+    NOMINAL.detector, recall_max=1.0, recall_half_m=1e4, occlusion_power=0.0, min_visible_px=0.0,
+    depth_rel0=0.0, depth_rel_per_m=0.0, lateral_rad=0.0, size_log_std=0.0, yaw_std=0.0, yaw_flip_prob=0.0,
+    confusion_prob=0.0, fp_per_frame=0.0, tp_logit=10.0, score_logit_std=0.0)
+#: a detector that reports every visible object where it is, with no false positives
+SHARP = replace(NOMINAL, detector=_EXACT_DETECTOR)
+#: a detector that reports nothing at all
+BLIND = replace(NOMINAL, detector=replace(NOMINAL.detector, recall_max=0.0, fp_per_frame=0.0))
+
+
+@pytest.fixture(scope="module")
+def camera():
+    """nuScenes' front camera at half resolution (800 x 450), to keep the tests quick."""
+    front = Camera.nuscenes_front()
+    return Camera(np.diag([0.5, 0.5, 1.0]) @ front.K, 800, 450, front.cam_to_ego)
+
+
+@pytest.fixture(scope="module")
+def monitor(camera):
+    prior = build_prior((f"{s}/{f.index}", f.depth_est) for s in (100000, 100001)
+                        for f in generate_frames("nominal", s, n_frames=10, camera=camera)).mean()
+    config = load_config()
+    # half the image: the depth view's smallest box is half as many pixels
+    config = replace(config, retrieval=replace(config.retrieval, min_size=config.retrieval.min_size / 2))
+    return RiskMonitor(fuzzcore.load(shipped_rules()), prior, camera, config, explain=False)
+
+
+@pytest.fixture(scope="module")
+def perception(monitor):
+    return Perception(monitor.camera)
+
+
+def _rare_seed(regime: str, classes=("animal", "wheelchair")) -> int:
+    """The first seed whose rare-object scenario has this speed regime and hazard class."""
+    for seed in range(100):
+        world = build_world(ScenarioSpec("rare-object", "nominal", seed))
+        if world.regime == regime and world.hazard.actor.actor_class in classes:
+            return seed
+    raise AssertionError("no such seed in 0..99")
+
+
+def test_stopping_distance_by_hand():
+    # 10 m/s, 0.2 s reaction: 2 m; then 10^2 / (2 * 5) = 10 m of braking
+    assert stopping_distance(10.0, 5.0, 0.2) == pytest.approx(12.0)
+    assert required_gap(10.0, 5.0, 0.2) == pytest.approx(12.0, abs=1e-9)
+    # a lead at 10 m/s braking at 10 m/s^2 covers 10^2 / 20 = 5 m; the ego needs 12: 7 m of gap
+    assert required_gap(10.0, 5.0, 0.2, 10.0, 10.0) == pytest.approx(7.0, abs=1e-3)
+    # a hazard as fast as the ego, never braking: the ego never gains on it
+    assert required_gap(10.0, 5.0, 0.2, 10.0, 0.0) == 0.0
+
+
+def test_advance_integrates_exactly():
+    # 8 m/s braking at 6 m/s^2 in steps of 0.1 s: stops after 4/3 s, 8^2 / 12 = 5.333 m
+    speed, distance = 8.0, 0.0
+    for _ in range(20):
+        step, speed = advance(speed, -6.0, 0.1, 8.0)
+        distance += step
+    assert speed == 0.0 and distance == pytest.approx(64.0 / 12.0, abs=1e-12)
+    # 3 m/s accelerating at 1.5 m/s^2 to 4 m/s: 2/3 s at 3.5 m/s mean, then 1/3 s at 4 m/s
+    assert advance(3.0, 1.5, 1.0, 4.0) == pytest.approx((3.5 * 2 / 3 + 4.0 / 3, 4.0))
+    assert advance(5.0, 0.0, 0.5, 5.0) == (2.5, 5.0)
+
+
+@pytest.fixture
+def rare_objects_detected(monkeypatch):
+    """The detector recalls animals, wheelchairs and debris like cars (recall factor 1)."""
+    for name in ("animal", "wheelchair", "debris"):
+        monkeypatch.setitem(DETECTOR_CLASSES, name, DetectorClass("pedestrian", 1.0, ("bicycle",)))
+
+
+def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects_detected, perception, monitor):
+    seed = _rare_seed("urban")
+    spec = ScenarioSpec("rare-object", "nominal", seed)
+    driver = Driver()
+    base, shielded = run_scenario(spec, perception, monitor, [monitor.config.shield], driver, condition=SHARP)
+    assert base.outcome == "stopped" and shielded.outcome == "stopped"
+    # the baseline's brake goes on delay_steps frames after the frame it decided in; from that
+    # frame it covers v * reaction + v^2 / (2 brake) to standstill
+    h = base.history
+    first = next(k for k, d in enumerate(h["decel"]) if d > 0)
+    decided = first - driver.delay_steps
+    v = h["speed"][decided]
+    assert h["speed"][first] == v  # cruising until the brake acts
+    travelled = h["gap"][decided] - base.final_gap
+    assert travelled == pytest.approx(v * 0.2 + v * v / 12.0, abs=1e-9)
+    assert base.final_gap > 0 and shielded.final_gap > 0
+
+
+def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
+    seed = _rare_seed("parking")
+    spec = ScenarioSpec("rare-object", "nominal", seed)
+    base, shielded = run_scenario(spec, perception, monitor, [monitor.config.shield], condition=BLIND)
+    assert base.collided and base.braking_frames == 0
+    assert base.impact_speed == pytest.approx(base.cruise)  # nothing braked it
+    assert base.onset is not None and base.onset["avoidable"]
+    assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
+
+
+def test_seeds_reproduce_and_differ(perception, monitor):
+    spec = ScenarioSpec("cut-in", "rain", 3)
+    first = [r.to_dict() for r in run_scenario(spec, perception, monitor, [monitor.config.shield])]
+    again = [r.to_dict() for r in run_scenario(spec, perception, monitor, [monitor.config.shield])]
+    assert first == again
+    other = [r.to_dict() for r in run_scenario(replace(spec, seed=4), perception, monitor, [monitor.config.shield])]
+    assert other[0]["history"] != first[0]["history"]
+
+
+def test_branches_equal_separate_runs(perception, monitor):
+    """Drivers sharing a world until they part give the runs they give alone."""
+    spec = ScenarioSpec("lead-brake", "nominal", 5)
+    strict = replace(monitor.config.shield, threshold=0.8, release=0.8)
+    together = run_scenario(spec, perception, monitor, [monitor.config.shield, strict])
+    alone = run_scenario(spec, perception, monitor, [strict])
+    assert together[2].to_dict() == alone[1].to_dict()
+    assert together[0].to_dict() == alone[0].to_dict()
+
+
+def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
+         engaged=0, impact=0.0):
+    run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, impact_speed=impact,
+              trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged)
+    run.onset = {"avoidable": avoidable}
+    return run
+
+
+def test_measures_by_hand():
+    shield = "t0.50 r0.50 h0"
+    runs = [
+        # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
+        _run("rare-object", 0, BASELINE, "collision", impact=10.0), _run("rare-object", 0, shield),
+        _run("rare-object", 1, BASELINE, "collision", impact=8.0), _run("rare-object", 1, shield, "collision",
+                                                                         impact=4.0),
+        _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0),
+        _run("rare-object", 2, shield),
+        _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
+        # 2 drives: the shield brakes in one (trip 12 s instead of 10 s: +20 %), not in the other
+        _run("hazard-free", 0, BASELINE, "arrived", trip=10.0), _run("hazard-free", 0, shield, "arrived", trip=12.0,
+                                                                     braking=5, engaged=4),
+        _run("hazard-free", 1, BASELINE, "arrived", trip=10.0), _run("hazard-free", 1, shield, "arrived", trip=10.0),
+    ]
+    s = sm.summarise(runs, shield)
+    h = s["by_kind"]["rare-object"]
+    assert (h["baseline_collisions"], h["shielded_collisions"]) == (3, 1)
+    assert h["avoidance_rate"] == pytest.approx(2 / 3)
+    assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)  # seeds 0 and 1, seed 0 avoided
+    assert h["avoidance_rate_unavoidable"] == 1.0 and h["impact_speed_shielded"] == 4.0
+    a = s["by_kind"]["hazard-free"]
+    assert a["false_brake_rate"] == 0.5 and a["added_trip_time"] == pytest.approx(0.1)  # (20 % + 0) / 2
+    assert a["braking_share"] == pytest.approx(5 / 20)
+    g = s["overall"]["guerin"]
+    # hazard: baseline 3 / 6 runs, shield 1 / 6; reward 1/trip: mean(1/12, 1/10) vs 1/10
+    assert g["safety_gain"] == pytest.approx(2 / 6) and g["residual_hazard"] == pytest.approx(1 / 6)
+    assert g["availability_cost"] == pytest.approx(1 - (1 / 12 + 1 / 10) / 2 / (1 / 10))
+    with pytest.raises(ValueError, match="expected 'baseline'"):
+        sm.pair_runs(runs[1:], shield)
