@@ -23,7 +23,7 @@ import pytest
 from monitor.depth import _retrieval_kernels as kernels
 from monitor.geometry.boxes import within_range
 from monitor.depth.prior import build_prior
-from monitor.depth.retrieval import RetrievalParams, Retriever, _block_means, warmup
+from monitor.depth.retrieval import RetrievalParams, Retriever, warmup
 from monitor.synthetic.generate import generate_frames
 
 PARAMS = RetrievalParams()
@@ -55,7 +55,7 @@ def frame():
     prior = build_prior((str(f.index), f.depth_est) for f in training).mean()
     depth = list(generate_frames("nominal", 0, n_frames=4))[3].depth_est
     warmup()
-    return depth, prior, _block_means(prior)  # the block prior: once per camera, as Retriever
+    return depth, prior, block_prior_numpy(prior)  # once per camera, as Retriever
 
 
 def _record(benchmark, name):
@@ -63,6 +63,20 @@ def _record(benchmark, name):
 
 
 # --- the straight NumPy/OpenCV version --------------------------------------------------------
+
+
+def block_prior_numpy(prior):
+    """Mean of the finite values of each 2 x 2 block (NaN if none), float32, as Retriever's."""
+    height, width = prior.shape
+    padded = np.pad(prior.astype(np.float64), ((0, height % 2), (0, width % 2)),
+                    constant_values=np.nan)
+    blocks = padded.reshape(padded.shape[0] // 2, 2, padded.shape[1] // 2, 2)
+    blocks = blocks.transpose(0, 2, 1, 3).reshape(blocks.shape[0], blocks.shape[2], 4)
+    finite = np.isfinite(blocks)
+    sums = np.where(finite, blocks, 0.0).sum(axis=2)  # in order: top left, top right, ...
+    counts = finite.sum(axis=2)
+    with np.errstate(invalid="ignore"):
+        return np.where(counts > 0, sums / counts, np.nan).astype(np.float32)
 
 
 def foreground_numpy(depth, block_prior):

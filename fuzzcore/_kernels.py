@@ -44,7 +44,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from .jit import kernel
 
 # codes (kept in step with fuzzcore.compiled and fuzzcore.membership)
 MAMDANI, SUGENO = 0, 1
@@ -75,14 +77,11 @@ CHUNK = 4 * BLOCK
 
 _GAUSS = 0.5 / math.sqrt(3.0)  # 2-point Gauss-Legendre node offset, in units of the interval
 
-#: error_model="numpy": a division by zero gives IEEE's inf or NaN, as MATLAB's does, instead
-#: of raising (a check on every division that also stops loops from vectorising)
-_jit = dict(cache=True, nogil=True, error_model="numpy")
 _OFF = (np.uint64(0), np.uint64(1))  # unsigned constants: an index stays unsigned
 
 
 # --------------------------------------------------------------------------- memberships
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _trimf(a, b, c, x):
     # both slopes first, then a choice without branches, so a loop over lanes vectorises;
     # the value chosen is the one trimf.m computes (a slope with a zero width is never chosen)
@@ -93,7 +92,7 @@ def _trimf(a, b, c, x):
     return 1.0 if x == b else y
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _trapmf(a, b, c, d, x):
     rise = (x - a) / (b - a)  # as in _trimf: computed first, chosen without branches
     fall = (d - x) / (d - c)
@@ -102,14 +101,14 @@ def _trapmf(a, b, c, d, x):
     return min(y1, y2)
 
 
-@njit(**_jit)
+@kernel
 def _sig(a, c, x):
     if a == 0.0:
         return 0.5
     return 1.0 / (1.0 + math.exp(-a * (x - c)))
 
 
-@njit(**_jit)
+@kernel
 def _smf(a, b, x):
     if a >= b:
         return 1.0 if x >= 0.5 * (a + b) else 0.0
@@ -124,7 +123,7 @@ def _smf(a, b, x):
     return 1.0 - 2.0 * t * t
 
 
-@njit(**_jit)
+@kernel
 def _zmf(a, b, x):
     if a >= b:
         return 1.0 if x <= 0.5 * (a + b) else 0.0
@@ -139,7 +138,7 @@ def _zmf(a, b, x):
     return 2.0 * t * t
 
 
-@njit(**_jit)
+@kernel
 def mf(kind, p0, p1, p2, p3, x):
     """Membership of ``x`` in the term ``kind`` with parameters p0..p3 (MATLAB's formulas).
 
@@ -196,7 +195,7 @@ def mf(kind, p0, p1, p2, p3, x):
     return math.nan
 
 
-@njit(**_jit)
+@kernel
 def mf_array(kind, p, x, out):
     """``out[i] = mf(kind, *p, x[i])`` for 1-D ``x`` and ``p`` of length 4 (zero-padded)."""
     for i in range(x.shape[0]):
@@ -204,7 +203,7 @@ def mf_array(kind, p, x, out):
 
 
 # --------------------------------------------------------------------------- packed tables
-@njit(**_jit)
+@kernel
 def refresh_tables(fblob, iblob):
     """Recompute the output grids, term tables and term supports from the output parameters.
 
@@ -236,19 +235,19 @@ def refresh_tables(fblob, iblob):
 
 
 # --------------------------------------------------------------------------- lane steps
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _and(a, b):
     """``min(a, b)``, NaN if either is NaN (the builtin ``min`` drops a NaN second argument)."""
     return a if a != a else (a if a < b else b)
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _or(a, b):
     """``max(a, b)``, NaN if either is NaN."""
     return a if a != a else (a if a > b else b)
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _keep(v):
     """``v + 0.0`` for a ``max``/``min`` update ``w[i] = keep(op(w[i], x))``.
 
@@ -259,7 +258,7 @@ def _keep(v):
     return v + 0.0
 
 
-@njit(**_jit)
+@kernel
 def _memberships(w, fblob, iblob, m, B):
     """Row R_MU + t = membership of the input lanes in input term t."""
     m, B = np.uint64(m), np.uint64(B)
@@ -281,7 +280,7 @@ def _memberships(w, fblob, iblob, m, B):
                 w[dst + s] = mf(kind, p0, p1, p2, p3, w[src + s])
 
 
-@njit(**_jit)
+@kernel
 def _fire(w, fblob, iblob, m, B):
     """Row R_FIRE + r = weighted firing strength of rule r."""
     m, B = np.uint64(m), np.uint64(B)
@@ -313,7 +312,7 @@ def _fire(w, fblob, iblob, m, B):
             w[dst + s] = w[dst + s] * weight
 
 
-@njit(**_jit)
+@kernel
 def _active_sets(w, iblob, o, m, B):
     """List the implied sets of output ``o`` that some lane fires; returns their count.
 
@@ -367,7 +366,7 @@ def _active_sets(w, iblob, o, m, B):
     return n
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _aggregate(a, v, agg_m):
     """Aggregate the implied value ``v`` into ``a`` (MATLAB's max, sum or probor)."""
     if agg_m == AGG_MAX:
@@ -375,13 +374,13 @@ def _aggregate(a, v, agg_m):
     return a + v if agg_m == AGG_SUM else a + v - a * v
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _implied(level, mu, imp_m):
     """MATLAB's implication of a set's level on a membership value: min or prod."""
     return (level if level < mu else mu) if imp_m == IMP_MIN else level * mu
 
 
-@njit(**_jit)
+@kernel
 def _centroid_lanes(w, fblob, iblob, o, n_sets, m, B, imp_m, agg_m):
     """Rows R_Y + o = centroid of output ``o``'s aggregated set, every lane of the block.
 
@@ -441,7 +440,7 @@ def _centroid_lanes(w, fblob, iblob, o, n_sets, m, B, imp_m, agg_m):
         w[y + s] = w[num + s] / w[den + s] if w[den + s] > 0.0 else math.nan
 
 
-@njit(**_jit)
+@kernel
 def _aggregate_sample(w, fblob, iblob, o, n_sets, s, B, imp_m, agg_m):
     """Output ``o``'s aggregated set of lane ``s`` on the whole grid, into the sample's
     scratch at T_AGG (res floats): the sets in list order onto 0, each over its stretch only
@@ -477,7 +476,7 @@ def _aggregate_sample(w, fblob, iblob, o, n_sets, s, B, imp_m, agg_m):
     return lo, hi
 
 
-@njit(**_jit)
+@kernel
 def _centroid_sample(w, fblob, iblob, o, agg, lo, hi):
     """Centroid of one sample's aggregated set ``w[agg: agg + res]``, which is 0 outside grid
     points lo .. hi - 1: the sums of :func:`_centroid_lanes`, in the same order, so the same
@@ -491,7 +490,7 @@ def _centroid_sample(w, fblob, iblob, o, agg, lo, hi):
     return num / den if den > 0.0 else math.nan
 
 
-@njit(**_jit)
+@kernel
 def _grid_scan(w, fblob, iblob, o, agg):
     """MATLAB's discrete bisector, mom, som or lom of one sample's aggregated set
     ``w[agg: agg + res]`` on output ``o``'s grid; NaN when the set is empty. The bisector
@@ -537,7 +536,7 @@ def _grid_scan(w, fblob, iblob, o, agg):
     return best
 
 
-@njit(**_jit)
+@kernel
 def _set_at(w, fblob, iblob, o, t, q, yv):
     """Value at ``yv`` of implied set ``q`` of one sample (scratch lists at ``t``)."""
     code, level = int(w[t + iblob[T_CODE] + q]), w[t + iblob[T_LEVEL] + q]
@@ -549,7 +548,7 @@ def _set_at(w, fblob, iblob, o, t, q, yv):
     return min(level, m) if iblob[IMP] == IMP_MIN else level * m
 
 
-@njit(**_jit)
+@kernel
 def _agg_at(w, fblob, iblob, o, t, n_sets, yv):
     acc = 0.0
     for q in range(n_sets):
@@ -558,7 +557,7 @@ def _agg_at(w, fblob, iblob, o, t, n_sets, yv):
     return acc
 
 
-@njit(**_jit)
+@kernel
 def _exact_centroid(w, fblob, iblob, o, t, n_sets):
     """Exact centroid of a piecewise-linear aggregated set on output ``o``'s range, for one
     sample whose implied sets are listed at ``w[t + T_CODE]`` / ``w[t + T_LEVEL]``.
@@ -634,7 +633,7 @@ def _exact_centroid(w, fblob, iblob, o, t, n_sets):
     return num / den
 
 
-@njit(inline="always", **_jit)
+@kernel(inline=True)
 def _fallback(fblob, iblob, o):
     """Output ``o``'s value when its set is empty: the ``no_rule_fired`` policy."""
     policy, rng = iblob[POLICY], iblob[F_OUT_RANGE] + 2 * o
@@ -643,7 +642,7 @@ def _fallback(fblob, iblob, o):
     return fblob[0] if policy == P_VALUE else math.nan
 
 
-@njit(**_jit)
+@kernel
 def _empty_to_policy(w, fblob, iblob, o, y, m):
     """Lanes of row ``y`` (output ``o``) that a Mamdani defuzzifier left NaN get the policy.
 
@@ -656,7 +655,7 @@ def _empty_to_policy(w, fblob, iblob, o, y, m):
         w[y + s] = fallback if v != v else v
 
 
-@njit(**_jit)
+@kernel
 def _mamdani(w, fblob, iblob, o, m, B):
     """Row R_Y + o = defuzzified output ``o`` (the ``no_rule_fired`` policy where its set is empty).
 
@@ -699,7 +698,7 @@ def _mamdani(w, fblob, iblob, o, m, B):
     _empty_to_policy(w, fblob, iblob, o, y, lanes)
 
 
-@njit(**_jit)
+@kernel
 def _sugeno(w, fblob, iblob, o, m, B):
     """Row R_Y + o = weighted average (or sum) of the rule outputs of Sugeno output ``o``; the
     ``no_rule_fired`` policy where the total weight is 0. A NaN rule output (``0 * inf``) gives NaN."""
@@ -737,7 +736,7 @@ def _sugeno(w, fblob, iblob, o, m, B):
         w[y + s] = (w[num + s] / d if wtaver else w[num + s]) if d > 0.0 else fallback
 
 
-@njit(**_jit)
+@kernel
 def _infer(w, fblob, iblob, m, B):
     """Evaluate the ``m`` samples in the input rows of work array ``w`` (lanes 0..m-1 of
     rows 0..n_in-1, B lanes per row) into rows R_Y .. R_Y + n_out - 1.
@@ -777,7 +776,7 @@ def _infer(w, fblob, iblob, m, B):
                 w[y + s] = w[f + s] if w[f + s] != w[f + s] else w[y + s]
 
 
-@njit(**_jit)
+@kernel
 def _run(X, start, stop, fblob, iblob, out, lanes):
     """``out[i] = system(X[i])`` for ``start <= i < stop``, in blocks of ``lanes`` samples."""
     n_in, n_out, B = X.shape[1], out.shape[1], np.uint64(lanes)
@@ -794,7 +793,7 @@ def _run(X, start, stop, fblob, iblob, out, lanes):
 
 
 # --------------------------------------------------------------------------- entry points
-@njit(**_jit)
+@kernel
 def infer_one(xs, fblob, iblob):
     """One sample given as a tuple of floats; returns the first output (single-output fast path)."""
     w = np.empty(iblob[N_ROWS] + iblob[N_TAIL])
@@ -804,7 +803,7 @@ def infer_one(xs, fblob, iblob):
     return w[iblob[R_Y]]
 
 
-@njit(parallel=True, **_jit)
+@kernel(parallel=True)
 def evaluate_batch(X, fblob, iblob, out):
     """``out[i] = system(X[i])`` for X (n, n_in) and out (n, n_out), parallel over chunks of samples."""
     n = X.shape[0]
@@ -813,7 +812,7 @@ def evaluate_batch(X, fblob, iblob, out):
         _run(X, c * CHUNK, min(n, (c + 1) * CHUNK), fblob, iblob, out, BLOCK)
 
 
-@njit(**_jit)
+@kernel
 def evaluate_serial(X, fblob, iblob, out):
     """As :func:`evaluate_batch`, on the calling thread only (small batches, no thread start-up;
     the tuners call it per candidate from their own threads)."""
@@ -821,7 +820,7 @@ def evaluate_serial(X, fblob, iblob, out):
     _run(X, 0, n, fblob, iblob, out, max(1, min(BLOCK, n)))
 
 
-@njit(**_jit)
+@kernel
 def explain_one(X, fblob, iblob, mu_out, fire_out, agg_out, out):
     """One sample ``X`` (1, n_in) with its intermediate results.
 

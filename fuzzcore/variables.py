@@ -2,11 +2,15 @@
 from __future__ import annotations
 
 import math
+import numbers
 import re
 from dataclasses import dataclass
 
+import numpy as np
+
+from . import _kernels as K
 from .errors import RuleBaseError
-from .membership import check_params, resolve_kind
+from .membership import MAX_PARAMS, check_params, resolve_kind
 
 #: names usable in rule text: a letter or underscore, then letters, digits, ``_``, ``-`` or ``.``
 NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_.\-]*")
@@ -37,6 +41,46 @@ class Term:
         kind = resolve_kind(self.kind)
         object.__setattr__(self, "kind", kind.name)
         object.__setattr__(self, "params", tuple(float(p) for p in self.params))
+
+    def membership(self, x):
+        """Degree of membership of ``x`` in this term, MATLAB's function of the term's kind.
+
+        Parameters
+        ----------
+        x : float or array_like of float
+            Values of the term's variable, any shape. NaN gives NaN; infinities take the
+            function's limits (trimf(+inf) = 0, sigmf(+inf) = 1 for a > 0, ...).
+
+        Returns
+        -------
+        float for a scalar ``x``, else ndarray of float64 with the shape of ``x``; in [0, 1].
+
+        Raises
+        ------
+        RuleBaseError
+            If the term is a Sugeno output (``constant``, ``linear``: no membership function)
+            or its parameters are invalid for its kind.
+        TypeError
+            If ``x`` is not a real number or an array of real numbers.
+        """
+        kind = resolve_kind(self.kind)
+        if kind.output_only:
+            raise RuleBaseError(f"term {self.name!r} ({kind.name}) is a Sugeno output: it has no "
+                                "membership function")
+        problem = check_params(kind, self.params)
+        if problem:
+            raise RuleBaseError(f"term {self.name!r} ({kind.name} {list(self.params)}): {problem}")
+        scalar = isinstance(x, numbers.Real) and not isinstance(x, bool)
+        values = np.asarray(x)
+        if values.dtype == bool or values.dtype.kind not in "iuf":
+            raise TypeError(f"term {self.name!r}: x must be a real number or an array of real "
+                            f"numbers, got {type(x).__name__} of dtype {values.dtype}")
+        flat = np.ascontiguousarray(values, dtype=np.float64).ravel()
+        params = np.zeros(MAX_PARAMS)
+        params[:len(self.params)] = self.params
+        out = np.empty_like(flat)
+        K.mf_array(kind.code, params, flat, out)
+        return float(out[0]) if scalar else out.reshape(values.shape)
 
 
 @dataclass(frozen=True)

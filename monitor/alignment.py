@@ -19,8 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from monitor.geometry import _box_kernels as _k
-from monitor.geometry.boxes import as_boxes
+from monitor import _alignment_kernels as _k
+from monitor.geometry.boxes import as_boxes, centre_distances
 
 #: The paper's matching thresholds (Table I, second row).
 DEFAULT_ALPHA = 0.3
@@ -78,7 +78,7 @@ class Alignment:
 
 def _assign(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     partner = np.full(a.shape[0], -1, dtype=np.int64)
-    rows, cols = linear_sum_assignment(_k.centre_distances(a, b))
+    rows, cols = linear_sum_assignment(centre_distances(a, b))
     partner[rows] = cols
     return partner
 

@@ -2,10 +2,10 @@
 
 The configuration is a tree of frozen dataclasses that mirrors the YAML file: one class
 per section (``alignment``, ``detections``, ``retrieval`` with one subsection per depth
-view, ``risk``, ``shield``) and the scalars at the top (``max_range``). :func:`load_config` reads
-``monitor/default_config.yaml`` and overlays a user file that names only what it changes;
-the file's keys are read generically from the dataclasses' fields and types, so a new field
-is a new key with nothing else to keep in step. A section's field that has the name of a
+view, ``visibility``, ``risk``, ``shield``) and the scalars at the top (``max_range``).
+:func:`load_config` reads ``monitor/default_config.yaml`` and overlays a user file that
+names only what it changes; the file's keys are read generically from the dataclasses'
+fields and types, so a new field is a new key with nothing else to keep in step. A section's field that has the name of a
 top-level field (``retrieval.paper.max_range``) is not a key of its own: it takes the
 top-level value, so one range limit holds everywhere.
 
@@ -28,6 +28,7 @@ import yaml
 from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
+from monitor.depth.visibility import VisibilityParams
 from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.geometry.camera import DISTANCES
 
@@ -150,14 +151,22 @@ class RiskConfig:
         Risk of an invalid frame (safe default 1.0).
     no_objects : float in [0, 1]
         Risk when the depth view finds no safety-critical object in range.
+    no_view : float in [0, 1]
+        Risk of a frame the depth view cannot see through (blocked, no ground, a hidden
+        region: :mod:`monitor.depth.visibility`); safe default 1.0.
+    no_rule_fired : float in [0, 1]
+        Risk when no rule of the rule base fired for the frame's features (the rule base
+        has no answer there); safe default 1.0.
     """
 
     fail_safe: float = 1.0
     no_objects: float = 0.0
+    no_view: float = 1.0
+    no_rule_fired: float = 1.0
 
     def __post_init__(self):
-        _set(self, "fail_safe", _unit(self.fail_safe, "fail_safe"))
-        _set(self, "no_objects", _unit(self.no_objects, "no_objects"))
+        for name in ("fail_safe", "no_objects", "no_view", "no_rule_fired"):
+            _set(self, name, _unit(getattr(self, name), name))
 
 
 @dataclass(frozen=True)
@@ -204,11 +213,14 @@ class MonitorConfig:
     ----------
     alignment : AlignmentConfig
     max_range : float
-        Metres; S (and G in evaluation) beyond it are ignored. ``retrieval.max_range``
-        always equals it.
+        Metres; S (and G in evaluation) beyond it are ignored. ``retrieval.max_range`` (and
+        so both views' ``max_range``) always equals it.
     detections : DetectionsConfig
     retrieval : RetrievalConfig
         The depth view and its parameters.
+    visibility : VisibilityParams
+        When a frame cannot be seen through (:mod:`monitor.depth.visibility`);
+        ``visibility.max_range`` always equals ``max_range``.
     risk : RiskConfig
     shield : ShieldConfig
     """
@@ -217,6 +229,7 @@ class MonitorConfig:
     max_range: float = DEFAULT_RANGE_M
     detections: DetectionsConfig = field(default_factory=DetectionsConfig)
     retrieval: RetrievalConfig = field(default_factory=RetrievalConfig)
+    visibility: VisibilityParams = field(default_factory=VisibilityParams)
     risk: RiskConfig = field(default_factory=RiskConfig)
     shield: ShieldConfig = field(default_factory=ShieldConfig)
 
@@ -230,8 +243,9 @@ class MonitorConfig:
         if not (math.isfinite(max_range) and max_range > 0):
             raise ValueError(f"max_range = {self.max_range!r}, must be a finite number of metres > 0")
         _set(self, "max_range", max_range)
-        if self.retrieval.max_range != max_range:
-            _set(self, "retrieval", replace(self.retrieval, max_range=max_range))
+        for name in ("retrieval", "visibility"):
+            if getattr(self, name).max_range != max_range:
+                _set(self, name, replace(getattr(self, name), max_range=max_range))
 
 
 # ----------------------------------------------------------------------------- reading

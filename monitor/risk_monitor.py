@@ -12,11 +12,18 @@ Per frame (:meth:`RiskMonitor.step`):
 ``step`` validates the frame once, where it enters, and never raises for a bad frame: a
 depth map that is not a real floating (H, W) array (masked arrays included) or is mostly
 invalid, detections that are not finite real (n, 7) boxes of sane size and place, scores
-outside [0, 1], or a frame the geometric view cannot see through
-(:class:`~monitor.depth.geometric.BlindViewError`), give a report with status
-``invalid-input``, the reason, and the configured fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
+outside [0, 1], give a report with status ``invalid-input``, the reason, and the configured
+fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
 one of them raises instead of hiding in a report. A frame whose depth view finds nothing in
-range gives status ``no-objects`` and the configured ``risk.no_objects``.
+range gives status ``no-objects`` and the configured ``risk.no_objects``, but only after a
+check that the view could see anything: a frame the depth view cannot see through (its
+lower image blocked by something near, no ground within range, or a region of invalid
+pixels large enough to hide an object: :mod:`monitor.depth.visibility`; or, with the
+geometric view, what it calls blind: :class:`~monitor.depth.geometric.BlindViewError`) gives
+status ``no-view`` and ``risk.no_view`` (1.0 by default), whatever the view found. A frame whose
+features no rule of the rule base covers gives status ``no-rule-fired`` and
+``risk.no_rule_fired`` (1.0 by default) instead of the rule base's fallback output (MATLAB's
+midpoint 0.5, which is exactly the shield's threshold).
 
 The constructor calls :meth:`RiskMonitor.warmup`, which runs a synthetic frame through
 every stage, so the first real frame costs what the others do. ``step`` may be called from
@@ -24,6 +31,7 @@ several threads at once (the retrieval keeps one set of scratch buffers per thre
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -33,10 +41,11 @@ import fuzzcore
 from monitor import alignment as alignment_stage
 from monitor.alignment import Alignment, align
 from monitor.config import MonitorConfig
-from monitor.depth import geometric, retrieval
+from monitor.depth import geometric, retrieval, visibility
 from monitor.depth.geometric import BlindViewError, GeometricRetriever
 from monitor.depth.prior import check_prior
 from monitor.depth.retrieval import InvalidDepthError, Retriever, as_depth_map
+from monitor.depth.visibility import check_view
 from monitor.geometry.arrays import finite_array
 from monitor.geometry.boxes3d import as_boxes3d
 from monitor.geometry.camera import Camera, project_boxes
@@ -47,8 +56,12 @@ OK = "ok"
 NO_OBJECTS = "no-objects"
 #: Status of a frame the monitor could not assess: the risk is the fail-safe risk.
 INVALID_INPUT = "invalid-input"
+#: Status of a frame the depth view cannot see through: the risk is ``risk.no_view``.
+NO_VIEW = "no-view"
+#: Status of a frame whose features no rule covers: the risk is ``risk.no_rule_fired``.
+NO_RULE_FIRED = "no-rule-fired"
 #: Every status a report can have (the one definition; everything else imports these).
-STATUSES = (OK, NO_OBJECTS, INVALID_INPUT)
+STATUSES = (OK, NO_OBJECTS, INVALID_INPUT, NO_VIEW, NO_RULE_FIRED)
 
 
 class InvalidFrameError(ValueError):
@@ -66,14 +79,16 @@ class RiskReport:
     Attributes
     ----------
     risk : float
-        In [0, 1]. For ``invalid-input`` the fail-safe risk, for ``no-objects`` the
-        configured no-objects risk; never NaN.
+        In [0, 1]. For ``invalid-input`` the fail-safe risk, for ``no-objects``,
+        ``no-view`` and ``no-rule-fired`` the configured ``risk.no_objects``,
+        ``risk.no_view`` and ``risk.no_rule_fired``; never NaN.
     status : str
-        One of :data:`STATUSES`: :data:`OK`, :data:`NO_OBJECTS`, :data:`INVALID_INPUT`.
+        One of :data:`STATUSES`: :data:`OK`, :data:`NO_OBJECTS`, :data:`INVALID_INPUT`,
+        :data:`NO_VIEW`, :data:`NO_RULE_FIRED`.
     reason : str
         Why the frame is not ``ok`` ("" when it is).
     iou, rdd : float
-        The frame features IoU~ and RDD~ (NaN unless ``ok``).
+        The frame features IoU~ and RDD~ (NaN unless ``ok`` or ``no-rule-fired``).
     S, P : ndarray of shape (m, 5) / (n, 5)
         Depth-view objects and projected detections, rows ``cx, cy, w, h, d``.
     alignment : Alignment or None
@@ -81,7 +96,8 @@ class RiskReport:
     fired : list of (rule index, rule text, strength)
         Rules that fired, strongest first (empty unless ``ok``).
     timings : dict of str to float
-        Seconds spent per stage: ``retrieval``, ``projection``, ``alignment``, ``inference``.
+        Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
+        ``alignment``, ``inference``.
     """
 
     risk: float
@@ -114,7 +130,10 @@ class RiskMonitor:
     Parameters
     ----------
     fis : fuzzcore.FuzzySystem
-        Two inputs named ``iou`` and ``rdd`` (any order) and one output in [0, 1].
+        Two inputs named ``iou`` and ``rdd`` (any order) and one output in [0, 1]. The
+        monitor evaluates it with ``no_rule_fired = "nan"`` whatever its file says, so that
+        a frame no rule covers is reported as ``no-rule-fired`` (with
+        ``config.risk.no_rule_fired``) and never as the rule base's fallback value.
     prior : ndarray of shape (H, W)
         Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`); the
         paper's view uses it, the geometric one does not (it is still checked).
@@ -147,6 +166,7 @@ class RiskMonitor:
             raise ValueError(f"prior has shape {prior.shape}, the camera's image is "
                              f"({camera.height}, {camera.width})")
         self.fis = fis
+        self._rules = dataclasses.replace(fis, no_rule_fired="nan") if fis.no_rule_fired != "nan" else fis
         self.camera = camera
         self.config = config if config is not None else MonitorConfig()
         self.explain = explain
@@ -170,11 +190,12 @@ class RiskMonitor:
         image centre, and one detection where that box is.
         """
         (geometric if self.config.retrieval.method == "geometric" else retrieval).warmup()
+        visibility.warmup()
         alignment_stage.warmup()
-        self.fis.warmup()
+        self._rules.warmup()
         depth, detections = self._synthetic_frame()
         self.step(depth, detections, np.ones(len(detections)))
-        self.fis.explain(*((0.5, 0.0) if self._iou_first else (0.0, 0.5)))
+        self._rules.explain(*((0.5, 0.0) if self._iou_first else (0.0, 0.5)))
         return self
 
     def _synthetic_frame(self) -> tuple[np.ndarray, np.ndarray]:
@@ -187,6 +208,14 @@ class RiskMonitor:
         # a 1 m cube on the optical axis at the same distance, in the ego frame
         centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
         return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
+
+    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, str]:
+        """S, and why the view cannot see through the frame ("" when it can)."""
+        try:
+            S = self._retriever(depth)
+        except BlindViewError as exc:
+            return np.zeros((0, 5)), str(exc)
+        return S, check_view(depth, self.config.visibility)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -259,15 +288,18 @@ class RiskMonitor:
         -------
         RiskReport
             Status ``invalid-input`` (with the reason and the fail-safe risk) for a frame
-            that fails these rules, whose depth map is more invalid than the depth view's
-            ``max_invalid_fraction`` allows, or that the geometric view cannot see through.
+            that fails these rules or whose depth map is more invalid than the depth view's
+            ``max_invalid_fraction`` allows; ``no-view`` for a frame the depth view cannot see
+            through (``config.visibility``, or the geometric view's own
+            :class:`~monitor.depth.geometric.BlindViewError`), ``no-objects`` when it sees
+            nothing in range, ``no-rule-fired`` when no rule covers the features.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
-            S = self._retriever(depth)
-        except (InvalidFrameError, InvalidDepthError, BlindViewError) as exc:
+            S, blind = self._depth_view(depth)
+        except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
         timings["retrieval"] = t1 - t0
@@ -277,6 +309,9 @@ class RiskMonitor:
         alignment = align(S, P, self.config.alignment.alpha, self.config.alignment.beta)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
+        if blind:
+            return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=blind,
+                              S=S, P=P, alignment=alignment, timings=timings)
         if alignment.n_objects == 0:
             return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
                               reason=f"no safety-critical object within {self.config.max_range:g} m",
@@ -284,14 +319,15 @@ class RiskMonitor:
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
         if self.explain:  # one inference either way: the explanation carries the output
-            explanation = self.fis.explain(*args)
+            explanation = self._rules.explain(*args)
             risk, fired = explanation.outputs[self.fis.output_names[0]], explanation.fired()
         else:
-            risk, fired = self.fis.infer(*args), []
+            risk, fired = self._rules.infer(*args), []
         timings["inference"] = time.perf_counter() - t3
-        if not np.isfinite(risk):
-            return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT,
-                              reason=f"the rule base gave {risk} for IoU~ = {iou}, RDD~ = {rdd}",
-                              S=S, P=P, alignment=alignment, timings=timings)
+        if np.isnan(risk):  # the features are finite: only an empty rule output gives NaN
+            return RiskReport(risk=self.config.risk.no_rule_fired, status=NO_RULE_FIRED,
+                              reason=f"no rule of {self.fis.name!r} fired for IoU~ = {iou:.6g}, "
+                                     f"RDD~ = {rdd:.6g}: the rule base has no answer there",
+                              iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, timings=timings)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
                           alignment=alignment, fired=fired, timings=timings)

@@ -2,15 +2,51 @@
 
 Written from MATLAB's documented algorithm (trimf.m, trapmf.m, ..., evalfis, defuzz.m)
 independently of the Numba kernels: no shared code beyond the FuzzySystem definition.
+
+``exp`` and ``x ** b`` are the C library's (Python's ``math``), one element at a time, not
+numpy's: numpy's vectorised versions are chosen by CPU (SIMD) and are off by an ulp for a
+few percent of arguments on some CPUs. An ulp in a membership is enough to move an exact
+tie of mom/som/lom (with probor, ``1 + g - 1*g`` is 1.0 or not depending on g's last bit),
+and then the reference's answer would depend on the machine. The C library's exp and pow
+are correctly rounded for almost every argument, as MATLAB's are meant to be; the engine
+(Numba, calling the same C library) gives the same bits.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 
+def _exp(t):
+    """``exp`` of every element with the C library's exp; overflow gives inf (as in C)."""
+
+    def one(v):
+        try:
+            return math.exp(v)
+        except OverflowError:
+            return math.inf
+    t = np.asarray(t, dtype=float)
+    return np.array([one(v) for v in t.ravel().tolist()]).reshape(t.shape)
+
+
+def _pow(base, b):
+    """``base ** b`` of every element (``base >= 0``) with the C library's pow; overflow and
+    ``0 ** (b < 0)`` give inf (as in C)."""
+    exponent = float(b)
+
+    def one(v):
+        try:
+            return v ** exponent
+        except (OverflowError, ZeroDivisionError):
+            return math.inf
+    base = np.asarray(base, dtype=float)
+    return np.array([one(v) for v in base.ravel().tolist()]).reshape(base.shape)
+
+
 def _sig(a, c, x):
     with np.errstate(over="ignore", invalid="ignore"):
-        return np.where(a == 0, 0.5, 1.0 / (1.0 + np.exp(-a * (x - c))))
+        return np.where(a == 0, 0.5, 1.0 / (1.0 + _exp(-a * (x - c))))
 
 
 def _smf(a, b, x):
@@ -36,6 +72,7 @@ def _zmf(a, b, x):
     y[i2] = 1 - 2 * ((x[i2] - a) / (b - a)) ** 2
     i3 = (mid < x) & (x <= b)
     y[i3] = 2 * ((b - x[i3]) / (b - a)) ** 2
+    y[x >= b] = 0  # last, as zmf.m: when (a + b)/2 rounds to b, x == b is in both ranges above
     return y
 
 
@@ -67,15 +104,15 @@ def membership(kind: str, p, x) -> np.ndarray:
         return np.minimum(y1, y2)
     if kind == "gaussmf":
         s, c = p
-        return np.exp(-((x - c) ** 2) / (2 * s * s))
+        return _exp(-((x - c) ** 2) / (2 * s * s))
     if kind == "gauss2mf":
         s1, c1, s2, c2 = p
-        y1 = np.where(x <= c1, np.exp(-((x - c1) ** 2) / (2 * s1 * s1)), 1.0)
-        y2 = np.where(x >= c2, np.exp(-((x - c2) ** 2) / (2 * s2 * s2)), 1.0)
+        y1 = np.where(x <= c1, _exp(-((x - c1) ** 2) / (2 * s1 * s1)), 1.0)
+        y2 = np.where(x >= c2, _exp(-((x - c2) ** 2) / (2 * s2 * s2)), 1.0)
         return y1 * y2
     if kind == "gbellmf":
         a, b, c = p
-        return 1.0 / (1.0 + (((x - c) / a) ** 2) ** b)
+        return 1.0 / (1.0 + _pow(((x - c) / a) ** 2, b))
     if kind == "sigmf":
         return _sig(p[0], p[1], x)
     if kind == "dsigmf":

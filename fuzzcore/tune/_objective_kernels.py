@@ -24,9 +24,9 @@ after editing :mod:`fuzzcore._kernels`, delete this package's ``__pycache__``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from .. import _kernels as K
+from ..jit import kernel
 
 #: loss codes: squared error (RMSE), absolute error (MAE)
 LOSS_SQUARED, LOSS_ABSOLUTE = 0, 1
@@ -34,10 +34,8 @@ LOSS_SQUARED, LOSS_ABSOLUTE = 0, 1
 #: samples per block of the canonical sum
 CHUNK = 512
 
-_jit = dict(cache=True, nogil=True)
 
-
-@njit(**_jit)
+@kernel
 def _write_candidate(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, fb, ib):
     """Copy the base arrays into ``fb``/``ib`` and write one candidate's values at the positions."""
     fb[:] = fblob
@@ -50,7 +48,7 @@ def _write_candidate(fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, fb, ib):
         K.refresh_tables(fb, ib)
 
 
-@njit(**_jit)
+@kernel
 def _canonical_sum(inverse, Y, pred, fresh, position, loss):
     """Summed loss over samples (canonical order); sample i's prediction is ``fresh[position[u]]``
     where ``u = inverse[i]`` has ``position[u] >= 0``, else ``pred[u]``."""
@@ -68,7 +66,7 @@ def _canonical_sum(inverse, Y, pred, fresh, position, loss):
     return total
 
 
-@njit(**_jit)
+@kernel
 def full_sums(U, inverse, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, sums):
     """``sums[c]`` = summed loss of candidate ``c`` over every sample and output.
 
@@ -92,7 +90,7 @@ def full_sums(U, inverse, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, 
         sums[c] = _canonical_sum(inverse, Y, pred, pred, position, loss)
 
 
-@njit(**_jit)
+@kernel
 def predictions(U, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, out):
     """``out`` (m, n_out) = outputs of one candidate (``f_val``/``i_val`` of shape (1, .)) at the rows U."""
     fb, ib = np.empty_like(fblob), np.empty_like(iblob)
@@ -100,7 +98,7 @@ def predictions(U, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, out):
     K.evaluate_serial(U, fb, ib, out)
 
 
-@njit(**_jit)
+@kernel
 def subset_sums(U, inverse, Y, fblob, iblob, f_pos, f_val, i_pos, i_val, refresh, loss, base_pred, rows, start,
                 sums):
     """Summed loss of each candidate, re-evaluating only some rows.

@@ -3,12 +3,11 @@ validated, packed input; they never raise."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
-_jit = dict(cache=True, nogil=True, error_model="numpy")
+from ..jit import kernel
 
 
-@njit(**_jit)
+@kernel
 def strongest_per_cell(tables, offsets, n_terms, n_elements, ante, weights, is_or, and_prod, or_probor,
                        strongest, rule_max):
     """Strongest weighted firing strength in every cell, and each rule's largest strength.

@@ -26,23 +26,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _kernels as K
-from ..membership import PIECEWISE_LINEAR, resolve_kind
+from ..membership import PIECEWISE_LINEAR
 
 #: samples per axis for locating the critical points of smooth terms
 SAMPLES = 4097
 #: bisection steps for one critical point of a smooth term (2^-60 of a sampling step)
 BISECTIONS = 60
-
-
-def memberships(term, x: np.ndarray) -> np.ndarray:
-    """Membership of ``x`` (any shape, float64) in ``term``, as the engine computes it."""
-    p = np.zeros(4)
-    p[:len(term.params)] = term.params
-    flat = np.ascontiguousarray(x, dtype=np.float64).ravel()
-    out = np.empty_like(flat)
-    K.mf_array(resolve_kind(term.kind).code, p, flat, out)
-    return out.reshape(np.shape(x))
 
 
 def vertices(term) -> list[tuple[float, float]]:
@@ -91,7 +80,7 @@ def _smooth_points(term, lo: float, hi: float, levels: np.ndarray, tol: float) -
     grid = np.concatenate([np.linspace(lo, hi, SAMPLES),
                            [x for x in _characteristic(term) if lo < x < hi]])
     grid = np.unique(grid)
-    mu = memberships(term, grid)
+    mu = term.membership(grid)
     out = []
     tests = [lambda m: m > 0.0, lambda m: m < 1.0]
     tests += [lambda m, L=L: m >= L for L in levels if 0.0 < L < 1.0]
@@ -105,7 +94,7 @@ def _smooth_points(term, lo: float, hi: float, levels: np.ndarray, tol: float) -
                 if b - a <= tol:
                     break
                 m = 0.5 * (a + b)
-                if test(memberships(term, np.array([m])))[0] == ta:
+                if test(term.membership(np.array([m])))[0] == ta:
                     a = m
                 else:
                     b = m

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._kernels import strongest_per_cell
-from .cells import Axis, build_axis, memberships
+from .cells import Axis, build_axis
 
 #: uniform cuts per axis when a threshold meets prod/probor (coverage is then sampled)
 SUBDIVISIONS = 64
@@ -98,7 +98,7 @@ def decompose(fis, threshold: float, tol: float, max_cells: int) -> Cells:
     for axis, var in zip(axes, fis.inputs):
         offsets.append(sum(t.size for t in tables))
         reps = axis.representatives
-        table = np.stack([memberships(term, reps) for term in var.terms], axis=1) if var.terms \
+        table = np.stack([term.membership(reps) for term in var.terms], axis=1) if var.terms \
             else np.zeros((reps.shape[0], 0))
         tables.append(table.ravel())
     ante = np.array([r.antecedent for r in fis.rules], dtype=np.int64).reshape(len(fis.rules), len(fis.inputs))

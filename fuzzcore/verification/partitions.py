@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..membership import PIECEWISE_LINEAR
-from .cells import SAMPLES, memberships, vertices
+from .cells import SAMPLES, vertices
 
 #: neighbouring terms more similar than this are reported as hard to tell apart
 SIMILARITY_LIMIT = 0.5
@@ -89,7 +89,7 @@ def _points(var) -> np.ndarray:
     breaks = sorted({x for t in pwl for x, _ in vertices(t) if lo <= x <= hi} | {lo, hi})
     pts = list(breaks) + [np.nextafter(x, -np.inf) for x in breaks] + [np.nextafter(x, np.inf) for x in breaks]
     for u, v in zip(breaks, breaks[1:]):  # crossings of linear pieces inside (u, v)
-        a = np.array([memberships(t, np.array([np.nextafter(u, np.inf), np.nextafter(v, -np.inf)])) for t in pwl])
+        a = np.array([t.membership(np.array([np.nextafter(u, np.inf), np.nextafter(v, -np.inf)])) for t in pwl])
         for i in range(len(pwl)):
             for j in range(i + 1, len(pwl)):
                 di, dj = a[i, 1] - a[i, 0], a[j, 1] - a[j, 0]
@@ -111,7 +111,7 @@ def partition(var, role: str) -> Partition:
     """The :class:`Partition` of variable ``var`` (an input or a Mamdani output)."""
     x = _points(var)
     names = [t.name for t in var.terms]
-    mu = np.array([memberships(t, x) for t in var.terms]) if var.terms else np.zeros((0, x.shape[0]))
+    mu = np.array([t.membership(x) for t in var.terms]) if var.terms else np.zeros((0, x.shape[0]))
     centres = {}
     for name, m in zip(names, mu):
         area = _integral(m, x)

@@ -19,7 +19,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cells import memberships
 
 
 @dataclass(frozen=True)
@@ -65,7 +64,7 @@ class RuleFindings:
 
 def strengths(fis, X: np.ndarray) -> np.ndarray:
     """Weighted firing strengths (n_samples, n_rules) at the rows of ``X``, as the engine computes them."""
-    mu = [np.stack([memberships(t, X[:, i]) for t in var.terms], axis=1) if var.terms else None
+    mu = [np.stack([t.membership(X[:, i]) for t in var.terms], axis=1) if var.terms else None
           for i, var in enumerate(fis.inputs)]
     out = np.empty((X.shape[0], len(fis.rules)))
     for r, rule in enumerate(fis.rules):

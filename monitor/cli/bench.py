@@ -37,8 +37,6 @@ from fuzzcore.bench import CALLS, PERCENTILES, BenchResult, latency
 from monitor.report.tables import format_table
 from monitor.shipped import shipped_rules
 
-HELP = "measure the latency of a rule base (or of the monitor) against a real-time budget"
-
 #: time units for --budget -> nanoseconds (µ: the micro sign and the Greek letter mu)
 UNITS = {"ns": 1.0, "us": 1e3, "\u00b5s": 1e3, "\u03bcs": 1e3, "ms": 1e6, "s": 1e9}
 #: ratios within this of 1 are not called better or worse (a shared machine's noise)

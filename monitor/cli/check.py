@@ -16,8 +16,6 @@ import json
 import fuzzcore
 from fuzzcore.verification import parse_monotone
 
-HELP = "verify a rule base: coverage of the input box, monotonicity, output range, rules and terms"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("rules", metavar="RULES", help="rule base (.yaml or .fis)")

@@ -18,8 +18,6 @@ from pathlib import Path
 import fuzzcore
 from fuzzcore.io import check_save_path
 
-HELP = "convert a rule base between YAML and MATLAB .fis (the format follows each extension)"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("input", metavar="IN", help="rule base to read (.yaml, .yml or .fis)")

@@ -31,17 +31,17 @@ from monitor.offline.measures import frame_truth, quality_tables, training_mean
 from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
-from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, RiskMonitor
+from monitor.userfiles import check_output_folder, write_text
+from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
 
-HELP = "run the monitor on built-in synthetic scenes and write reports and figures"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-demo", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the output folder's earlier files")
     parser.add_argument("--rules", default=None, help="rule base (default: the shipped rules/fuzzrisk.yaml)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     parser.add_argument("--scenes", type=int, default=2, help="scenes per condition (default %(default)s)")
@@ -62,7 +62,8 @@ def _summary(rows: list[dict], obs_by_condition: dict, fis) -> list[dict]:
         table.append({
             "condition": condition, "frames": len(mine),
             "ok": status.count(OK), "no_objects": status.count(NO_OBJECTS),
-            "invalid": status.count(INVALID_INPUT),
+            "invalid": status.count(INVALID_INPUT), "no_view": status.count(NO_VIEW),
+            "no_rule": status.count(NO_RULE_FIRED),
             "mean_risk": float(np.mean([r["risk"] for r in mine])),
             "shield_on": float(np.mean([r["shield"]["engaged"] for r in mine])),
             "mean_target": float(np.nanmean(targets)) if np.isfinite(targets).any() else float("nan"),
@@ -73,7 +74,8 @@ def _summary(rows: list[dict], obs_by_condition: dict, fis) -> list[dict]:
 
 
 _COLUMNS = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("ok", "ok", "{}"),
-            ("no_objects", "no-obj", "{}"), ("invalid", "invalid", "{}"), ("mean_risk", "risk", "{:.2f}"),
+            ("no_objects", "no-obj", "{}"), ("invalid", "invalid", "{}"), ("no_view", "no-view", "{}"),
+            ("no_rule", "no rule", "{}"), ("mean_risk", "risk", "{:.2f}"),
             ("shield_on", "shield", "{:.0%}"), ("mean_target", "1-USC~", "{:.2f}"), ("rmse", "RMSE", "{:.3f}"),
             ("recall_s", "rec S", "{:.2f}"), ("recall_p", "rec P", "{:.2f}"), ("ms_per_frame", "ms/frame", "{:.1f}")]
 
@@ -113,8 +115,9 @@ def _quality(split: list, fis, name: str, config, out: Path) -> dict:
 
 def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    frame_figures = [f"frame_{c.replace(' ', '_')}.png" for c in args.conditions]
+    out = check_output_folder(args.out, ["frames.jsonl", "fis.png", "risk_timeline.png", "retrieval_stages.png",
+                                         "quality.png", "report.md", *frame_figures], args.overwrite)
     rules_path = Path(args.rules) if args.rules else shipped_rules()
     fis = fuzzcore.load(rules_path)
     config = load_config(args.config)
@@ -149,9 +152,7 @@ def run(args: argparse.Namespace) -> int:
         series.append({"name": scene.name, "time": times, "risk": risks, "target": targets, "status": statuses})
     bar.close()
 
-    with open(out / "frames.jsonl", "w", encoding="utf-8") as f:
-        for row in rows:
-            f.write(json.dumps(row) + "\n")
+    write_text(out / "frames.jsonl", "".join(json.dumps(row) + "\n" for row in rows))
     figures = {"fis.png": save_fis_figure(fis, out / "fis.png"),
                "risk_timeline.png": save_risk_timeline(series, out / "risk_timeline.png",
                                                         config.shield.threshold)}
@@ -172,8 +173,7 @@ def run(args: argparse.Namespace) -> int:
     print(quality["title"])
     print(format_table(quality["rows"], _QUALITY))
     print(format_table(table, _COLUMNS))
-    (out / "report.md").write_text(_report(table, quality, rules_path, fis, bench, config, figures, elapsed),
-                                   encoding="utf-8")
+    write_text(out / "report.md", _report(table, quality, rules_path, fis, bench, config, figures, elapsed))
     print(f"{len(rows)} frames in {elapsed:.1f} s; reports and figures in {out}/")
     return 0
 

@@ -39,8 +39,7 @@ from monitor.report.quality_figure import save_quality_figure
 from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
-
-HELP = "the monitor's quality measures and the paper's validation tables, on synthetic or recorded scenes"
+from monitor.userfiles import check_output_folder, write_text
 
 QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
@@ -50,7 +49,11 @@ QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), (
 DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gts", "GTs", "{}"),
               ("recall", "recall", "{:.2f}"), ("objects", "S", "{}"), ("precision", "precision", "{:.2f}"),
               ("ok", "ok", "{:.0%}"), ("no-objects", "no-objects", "{:.0%}"),
-              ("invalid-input", "invalid", "{:.0%}")]
+              ("invalid-input", "invalid", "{:.0%}"), ("no-view", "no-view", "{:.0%}"),
+              ("no-rule-fired", "no rule", "{:.0%}")]
+
+#: the files the command writes in its output folder (checked before the work starts)
+OUTPUTS = ("report.md", "tables.json", "quality.png")
 
 CORRELATION = [("alpha", "alpha", "{}"), ("beta", "beta", "{}"), ("frames", "frames", "{}"),
                ("iou_r", "r IoU~", "{:.2f}"), ("rdd_r", "r RDD~", "{:.2f}")]
@@ -64,6 +67,7 @@ RMSE = [("rules", "rule base", "{}"), ("frames", "test frames", "{}"), ("rmse", 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("-o", "--out", default="fuzzrisk-eval", help="output folder (default %(default)s)")
+    parser.add_argument("--overwrite", action="store_true", help="replace the output folder's earlier files")
     parser.add_argument("--rules-dir", default=None, help="rule bases to compare (default: the shipped rules/)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     parser.add_argument("--hazard-iog", type=float, default=0.5,
@@ -91,6 +95,7 @@ def _undefined(rows: list[dict]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    out = check_output_folder(args.out, OUTPUTS, args.overwrite)
     try:
         criterion = HazardCriterion(min_iog=args.hazard_iog, min_dr=args.hazard_dr)
     except ValueError as exc:
@@ -115,8 +120,6 @@ def run(args: argparse.Namespace) -> int:
     threshold = config.shield.threshold
     quality, depth_view, risks = quality_tables(test, test_truth, systems, reference, threshold,
                                                 config.risk.fail_safe)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     shipped = shipped_rules().name if shipped_rules().name in risks else next(iter(systems))
     by_condition = _by_condition(test)
     figure = save_quality_figure(
@@ -166,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
             lines += [notes, ""]
         if columns is DEPTH_VIEW:
             lines += [f"![ROC and risk against target]({figure.name})", ""]
-    (out / "report.md").write_text("\n".join(lines), encoding="utf-8")
-    (out / "tables.json").write_text(json.dumps({"note": selection.note, **tables}, indent=1), encoding="utf-8")
+    write_text(out / "report.md", "\n".join(lines))
+    write_text(out / "tables.json", json.dumps({"note": selection.note, **tables}, indent=1))
     print(f"\nreport: {out / 'report.md'}")
     return 0

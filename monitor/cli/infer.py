@@ -10,8 +10,6 @@ import math
 
 import fuzzcore
 
-HELP = "evaluate a rule base (YAML or MATLAB .fis) for one set of inputs"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("rules", metavar="RULES", help="rule base file (.yaml, .yml or .fis)")

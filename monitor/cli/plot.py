@@ -18,8 +18,6 @@ import numpy as np
 import fuzzcore
 from fuzzcore.verification import parse_monotone
 
-HELP = "draw a rule base's terms and output surface, with uncovered and non-monotone regions marked"
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("rules", metavar="RULES", help="rule base (.yaml or .fis)")
@@ -34,8 +32,6 @@ def _draw(fis, report, monotone: dict, resolution: int):
     from matplotlib.figure import Figure
     from matplotlib.patches import Rectangle
 
-    from fuzzcore.verification.cells import memberships
-
     variables = list(fis.inputs) + (list(fis.outputs) if fis.type == "mamdani" else [])
     surface = len(fis.inputs) >= 2
     n = len(variables) + (1 if surface else 0)
@@ -45,7 +41,7 @@ def _draw(fis, report, monotone: dict, resolution: int):
     for ax, var in zip(axes, variables):
         x = np.linspace(*var.range, 801)
         for term in var.terms:
-            ax.plot(x, memberships(term, x), label=term.name)
+            ax.plot(x, term.membership(x), label=term.name)
         for lo, hi in partitions[var.name].uncovered:
             ax.axvspan(lo, hi if hi > lo else lo + 1e-3 * (var.range[1] - var.range[0]), color="red", alpha=0.3)
         ax.set_title(f"{'output' if var in fis.outputs else 'input'} {var.name}")

@@ -1,7 +1,7 @@
 """Scene selection shared by ``fuzzrisk eval`` and ``fuzzrisk features``.
 
 Either the built-in synthetic benchmark (:mod:`monitor.synthetic.suite`; the default), scene
-folders on disk (:mod:`monitor.datasets.frames` format) or nuScenes (:mod:`monitor.datasets.nuscenes`: its
+folders on disk (:mod:`monitor.datasets.scene_folder` format) or nuScenes (:mod:`monitor.datasets.nuscenes`: its
 tables, a detection-results file and depth maps), the last two with a prior file.
 """
 from __future__ import annotations
@@ -63,7 +63,7 @@ def add_scene_arguments(parser: argparse.ArgumentParser, *, default_scenes: int,
                        metavar="CONDITION", help="synthetic conditions (default: all six)")
     group.add_argument("--seed", type=int, default=0, help="synthetic benchmark seed (default %(default)s)")
     group.add_argument("--scene-dir", nargs="+", default=None, metavar="DIR",
-                       help="scene folders on disk instead (monitor.datasets.frames format); needs --prior")
+                       help="scene folders on disk instead (monitor.datasets.scene_folder format); needs --prior")
     group.add_argument("--prior", default=None, metavar="PRIOR.npy",
                        help="inverse-depth prior for --scene-dir or --nuscenes (see 'fuzzrisk prior build')")
     nus = parser.add_argument_group("nuScenes instead (needs --prior, --detections and --depth-dir)")

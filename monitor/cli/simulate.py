@@ -18,14 +18,13 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
 
 from tqdm import tqdm
 
-HELP = "closed loop with traffic: collisions avoided and false braking of the monitor's shield"
+from monitor.userfiles import check_output_folder, write_text
 
 SWEEP_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 #: (threshold - release, hold_frames) of the sweep's hysteresis settings
@@ -62,13 +61,9 @@ def _check(args: argparse.Namespace) -> list[Path]:
         raise ValueError(f"--seed {args.seed}: must be >= 0")
     if not 0 <= args.sweep <= args.scenarios:
         raise ValueError(f"--sweep {args.sweep}: must be in [0, --scenarios = {args.scenarios}]")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out {out}: exists and is not a folder")
-    targets = [out / name for name in OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ())]
-    present = [str(p) for p in targets if p.exists()]
-    if present and not args.overwrite:
-        raise ValueError(f"--out {out}: {', '.join(present)} already exist; pass --overwrite to replace them")
+    names = OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ())
+    out = check_output_folder(args.out, names, overwrite=args.overwrite)
+    targets = [out / name for name in names]
     return targets
 
 
@@ -129,12 +124,6 @@ def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=No
     return results
 
 
-def _write_text(path: Path, text: str) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(text, encoding="utf-8")
-    os.replace(tmp, path)
-
-
 def run(args: argparse.Namespace) -> int:
     targets = _check(args)
     from monitor.offline.scenarios import require_highway_env
@@ -155,8 +144,6 @@ def run(args: argparse.Namespace) -> int:
     rules = args.rules or str(shipped_rules())
     if not Path(rules).is_file():
         raise FileNotFoundError(f"--rules {rules}: no such file")
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=0)
     prior = bench.prior()
     specs = _jobs(args.kind, args.condition, args.scenarios, args.seed)
@@ -179,16 +166,16 @@ def run(args: argparse.Namespace) -> int:
                           f"{' '.join(args.kind)} --condition {' '.join(args.condition)} --sweep {args.sweep} "
                           f"--workers {args.workers}")
     paths = dict(zip(OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ()), targets))
-    _write_text(paths["runs.jsonl"], "".join(json.dumps(r.to_dict()) + "\n" for r in main_runs))
-    _write_text(paths["summary.json"], json.dumps(_clean(summary), indent=1) + "\n")
+    write_text(paths["runs.jsonl"], "".join(json.dumps(r.to_dict()) + "\n" for r in main_runs))
+    write_text(paths["summary.json"], json.dumps(_clean(summary), indent=1) + "\n")
     points = []
     if args.sweep:
         swept = [r for r in all_runs if (r.kind, r.condition, r.seed) in
                  {(s.kind, s.condition, s.seed) for s in sweep_specs}]
         points = sm.trade_off(swept)
-        _write_text(paths["sweep.jsonl"], "".join(json.dumps(_clean(p)) + "\n" for p in points))
+        write_text(paths["sweep.jsonl"], "".join(json.dumps(_clean(p)) + "\n" for p in points))
         trade_off_figure(points, default, paths["trade_off.png"])
-    _write_text(paths["summary.md"], markdown(summary, points, default, len(specs), seconds, args.workers,
+    write_text(paths["summary.md"], markdown(summary, points, default, len(specs), seconds, args.workers,
                                               SYNTHETIC_NOTE))
     pairs = sm.pair_runs(main_runs, default)
     shown = [p for p in pairs if p[0].collided][:4] + [p for p in pairs if p[0].kind == "hazard-free"][:1]
@@ -196,7 +183,7 @@ def run(args: argparse.Namespace) -> int:
     condition_figure(summary["by_condition"], paths["conditions.png"])
     print(SYNTHETIC_NOTE)
     print(markdown(summary, points, default, len(specs), seconds, args.workers, None))
-    print(f"runs, summary and figures in {out}/")
+    print(f"runs, summary and figures in {args.out}/")
     return 0
 
 

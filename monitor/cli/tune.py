@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import hashlib
-import os
 import time
 from pathlib import Path
 
@@ -38,8 +37,6 @@ from tqdm import tqdm
 import fuzzcore
 from fuzzcore.io import check_save_path
 from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
-
-HELP = "tune a rule base on a feature table: membership functions (patternsearch), rules (pso) or both (joint)"
 
 METHODS = ("patternsearch", "pso", "joint")
 

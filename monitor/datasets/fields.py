@@ -12,6 +12,17 @@ from pathlib import Path
 import numpy as np
 
 
+def _finite(value) -> bool:
+    """A JSON number (not a bool) that is finite as a float (an integer beyond float's
+    range is not)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False
+
+
 class JsonFields:
     """Typed access to one JSON object; errors name the file and the field path."""
 
@@ -30,8 +41,7 @@ class JsonFields:
 
     def number(self, key: str) -> float:
         value = self.get(key)
-        if (isinstance(value, bool) or not isinstance(value, (int, float))
-                or not math.isfinite(value)):
+        if not _finite(value):
             raise self.error(key, f"{value!r} is not a finite number")
         return float(value)
 
@@ -54,18 +64,18 @@ class JsonFields:
     def numbers(self, key: str, n: int) -> list[float]:
         value = self.get(key)
         if (not isinstance(value, list) or len(value) != n
-                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)):
-            raise self.error(key, f"{value!r} is not a list of {n} numbers")
+                or not all(_finite(v) for v in value)):
+            raise self.error(key, f"{value!r} is not a list of {n} finite numbers")
         return [float(v) for v in value]
 
     def matrix(self, key: str, rows: int, cols: int) -> np.ndarray:
         value = self.get(key)
         ok = isinstance(value, list) and len(value) == rows and all(
             isinstance(r, list) and len(r) == cols
-            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in r)
+            and all(_finite(v) for v in r)
             for r in value)
         if not ok:
-            raise self.error(key, f"expected a {rows}x{cols} list of lists of numbers")
+            raise self.error(key, f"expected a {rows}x{cols} list of lists of finite numbers")
         return np.array(value, dtype=np.float64)
 
     def objects(self, key: str) -> list["JsonFields"]:

@@ -31,7 +31,6 @@ floats are written with Python's shortest exact ``repr`` and maps as ``.npy``.
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 from typing import Iterator
 
@@ -40,6 +39,7 @@ import numpy as np
 from monitor.datasets.fields import JsonFields
 from monitor.datasets.frames import MAPS, Frame, Scene
 from monitor.geometry.camera import Camera
+from monitor.userfiles import read_npy, write_npy, write_text
 
 FORMAT = "fuzzrisk-scene"
 VERSION = 1
@@ -107,7 +107,7 @@ class SceneWriter:
                 continue
             relative = f"{name}/{len(self._frames):06d}.npy"
             (self.directory / name).mkdir(exist_ok=True)
-            np.save(self.directory / relative, array, allow_pickle=False)
+            write_npy(self.directory / relative, array)
             record[name] = relative
         record["annotations"] = [
             {"instance_id": int(i), "category_name": str(c), **box, "visibility": float(v)}
@@ -124,10 +124,7 @@ class SceneWriter:
     def close(self) -> Path:
         """Write ``scene.json`` (via a temporary file and a rename); return its path."""
         path = self.directory / SCENE_FILE
-        tmp = path.with_suffix(".json.tmp")
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump({**self._header, "frames": self._frames}, f, allow_nan=False)
-        os.replace(tmp, path)
+        write_text(path, json.dumps({**self._header, "frames": self._frames}, allow_nan=False))
         return path
 
     def __enter__(self) -> "SceneWriter":
@@ -185,6 +182,10 @@ class SceneReader:
                 data = json.load(f)
         except json.JSONDecodeError as exc:
             raise ValueError(f"{path}: not valid JSON ({exc})") from exc
+        except UnicodeDecodeError as exc:
+            raise ValueError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+        except RecursionError:
+            raise ValueError(f"{path}: JSON nested too deeply to read") from None
         self._path = path
         top = JsonFields(data, "scene", path)
         if top.get("format") != FORMAT or top.get("version") != VERSION:
@@ -250,13 +251,9 @@ class SceneReader:
         if not path.is_file():
             raise FileNotFoundError(
                 f"{self._path}: {record.where}.{name}: file {path} does not exist")
-        try:
-            array = np.load(path, allow_pickle=False)
-        except (ValueError, OSError) as exc:
-            raise ValueError(f"{path}: not a readable .npy array ({exc})") from exc
-        if not isinstance(array, np.ndarray) or array.dtype != MAPS[name]:
-            got = array.dtype if isinstance(array, np.ndarray) else "an archive"
-            raise ValueError(f"{path}: holds {got}, expected a {np.dtype(MAPS[name])} {name} map")
+        array = read_npy(path, f"{name} map")
+        if array.dtype != MAPS[name]:
+            raise ValueError(f"{path}: holds {array.dtype}, expected a {np.dtype(MAPS[name])} {name} map")
         return array
 
 

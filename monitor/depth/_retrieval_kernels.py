@@ -5,7 +5,7 @@ the stated dtypes and shapes) and never raise. A depth is valid when it is finit
 a prior (per pixel, or per block at ``downsample = 2``) is known when it is finite. NaN and
 inf are tested with plain comparisons.
 
-``error_model="numpy"`` makes a float division follow IEEE rules instead of testing for
+Compiled with :mod:`fuzzcore.jit`'s options, whose ``error_model="numpy"`` makes a float division follow IEEE rules instead of testing for
 zero (that test would both raise and keep LLVM from vectorising the loops); the kernels
 only use the quotient of a positive depth anyway. No fastmath: the per-pixel passes are
 bound by memory bandwidth (fastmath flags changed nothing measurable), and without them the
@@ -16,12 +16,13 @@ columns or sums a variable number of pixels per output ran 5-20 times slower.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 _INF = np.float32(np.inf)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _pixel(d, p):
     """``(1/d - p, 1)`` for a valid pixel, ``(0, 0)`` for an invalid one (float32, int32)."""
     zero = np.float32(0.0)
@@ -30,7 +31,7 @@ def _pixel(d, p):
     return (value if valid else zero), np.int32(valid)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _block_value(total, count, prior, known):
     """``total / count - prior`` clipped at 0, or -1 (the invalid marker) when
     ``count == 0`` or the prior is not ``known``."""
@@ -40,7 +41,7 @@ def _block_value(total, count, prior, known):
     return value if (count > 0) & known else np.float32(-1.0)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def foreground_pixels(depth, prior, values):
     """Pass 1 at full resolution: ``values = max(1/D - prior, 0)``, -1 on invalid pixels.
 
@@ -58,7 +59,7 @@ def foreground_pixels(depth, prior, values):
     return n_invalid
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _inverse(d):
     """``(1/d, 1, d)`` for a valid depth (finite, > 0), ``(0, 0, inf)`` otherwise."""
     zero = np.float32(0.0)
@@ -67,7 +68,7 @@ def _inverse(d):
     return (inverse if valid else zero), np.int32(valid), (d if valid else _INF)
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _quantise(v, scale):
     """``floor(v * scale + 0.5)`` capped at 255 as uint8; 0 for ``v <= 0`` (and invalid)."""
     q = v * scale + np.float32(0.5)
@@ -76,7 +77,7 @@ def _quantise(v, scale):
     return np.uint8(q)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def foreground_pairs(depth, block_prior, values, nearest):
     """Pass 1 on 2 x 2 blocks: ``mean(1/D) - prior`` per block, clipped at 0, and each
     block's smallest valid depth.
@@ -132,7 +133,7 @@ def foreground_pairs(depth, block_prior, values, nearest):
     return n_invalid
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def foreground_u8(values, scale, image, row_any, col_any, invalid, with_invalid):
     """Pass 2: quantise pass 1's values to uint8 and find the non-zero rows and columns.
 
@@ -156,7 +157,7 @@ def foreground_u8(values, scale, image, row_any, col_any, invalid, with_invalid)
         row_any[i] = row
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def rect_min_depth(depth, rects):
     """Smallest valid depth inside each rectangle (NaN if it holds no valid pixel).
 
@@ -180,14 +181,14 @@ def rect_min_depth(depth, rects):
     return out
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _known(p):
     """``(p, 1)`` as float64 for a finite prior value, ``(0, 0)`` otherwise."""
     known = abs(p) < _INF
     return (np.float64(p) if known else 0.0), np.int32(known)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def block_means(prior, out):
     """Mean of the finite values of each 2 x 2 block of ``prior``, NaN for a block without one.
 

@@ -24,6 +24,8 @@ from typing import Iterator
 import cv2
 import numpy as np
 
+from monitor.userfiles import check_png_size, read_npy, write_atomic
+
 #: KITTI's depth PNGs store metres * 256 in uint16
 KITTI_PNG_SCALE = 256.0
 
@@ -51,8 +53,11 @@ def load_depth(path: str | Path, *, png_scale: float = KITTI_PNG_SCALE) -> np.nd
     FileNotFoundError
         The file does not exist.
     ValueError
-        Unknown extension, a file that cannot be decoded, an array that is not 2-D, a
-        dtype that is not floating (``.npy``) or not uint16 (``.png``), or a bad scale.
+        Naming the file: unknown extension, a file that cannot be decoded, a header that
+        does not match the file or declares more than
+        :data:`monitor.userfiles.MAX_PIXELS` pixels (checked before anything is
+        allocated), an array that is not 2-D, a dtype that is not floating (``.npy``) or
+        not uint16 (``.png``), or a bad scale.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -69,12 +74,7 @@ def load_depth(path: str | Path, *, png_scale: float = KITTI_PNG_SCALE) -> np.nd
 
 
 def _load_npy(path: Path) -> np.ndarray:
-    try:
-        array = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        raise ValueError(f"depth file {path}: not a readable .npy array ({exc})") from exc
-    if not isinstance(array, np.ndarray):  # an .npz archive renamed .npy
-        raise ValueError(f"depth file {path}: holds an archive, expected one array")
+    array = read_npy(path, "depth file")
     if array.ndim != 2:
         raise ValueError(
             f"depth file {path}: array has shape {array.shape} ({array.ndim}-D), "
@@ -92,6 +92,7 @@ def _load_npy(path: Path) -> np.ndarray:
 def _load_png(path: Path, png_scale: float) -> np.ndarray:
     if not (np.isfinite(png_scale) and png_scale > 0):
         raise ValueError(f"png_scale = {png_scale}, must be a finite number > 0 (values per metre)")
+    check_png_size(path, "depth file")
     raw = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
     if raw is None:
         raise ValueError(f"depth file {path}: OpenCV cannot decode it as a PNG image")
@@ -111,7 +112,8 @@ def _load_png(path: Path, png_scale: float) -> np.ndarray:
 
 
 def save_depth_png(path: str | Path, depth: np.ndarray, *, png_scale: float = KITTI_PNG_SCALE) -> None:
-    """Write a depth map as a 16-bit PNG (value = round(depth * png_scale), 0 = invalid).
+    """Write a depth map as a 16-bit PNG (value = round(depth * png_scale), 0 = invalid),
+    whole or not at all (:func:`monitor.userfiles.write_atomic`).
 
     Parameters
     ----------
@@ -148,8 +150,10 @@ def save_depth_png(path: str | Path, depth: np.ndarray, *, png_scale: float = KI
             f"depth range {depth[valid].min():g}..{depth[valid].max():g} m does not fit a "
             f"16-bit PNG at png_scale = {png_scale:g} (1..65535 stored values)"
         )
-    if not cv2.imwrite(str(path), scaled.astype(np.uint16)):
-        raise OSError(f"cannot write depth PNG {path}")
+    ok, encoded = cv2.imencode(".png", scaled.astype(np.uint16))
+    if not ok:
+        raise OSError(f"cannot encode depth PNG {path}")
+    write_atomic(path, lambda handle: handle.write(encoded.tobytes()))
 
 
 class DepthFolder:

@@ -25,6 +25,8 @@ from typing import Iterable
 
 import numpy as np
 
+from monitor.userfiles import read_npy, write_npy
+
 
 class InverseDepthPrior:
     """Streaming per-pixel mean of inverse depth over valid samples.
@@ -103,33 +105,35 @@ def build_prior(depths: Iterable[tuple[str, np.ndarray]]) -> InverseDepthPrior:
 
 
 def save_prior(path: str | Path, prior: np.ndarray) -> None:
-    """Write a prior (float32 (H, W), 1/m, NaN = no sample) as ``.npy``."""
+    """Write a prior (float32 (H, W), 1/m, NaN = no sample) as ``.npy``, whole or not at
+    all (:func:`monitor.userfiles.write_atomic`)."""
     path = Path(path)
     if path.suffix.lower() != ".npy":
         raise ValueError(f"prior path {path} must end in .npy")
-    np.save(path, check_prior(prior, name=str(path)))
+    write_npy(path, check_prior(prior, name=str(path)))
 
 
 def load_prior(path: str | Path) -> np.ndarray:
-    """Read a prior written by :func:`save_prior` (or ``fuzzrisk prior build``)."""
+    """Read a prior written by :func:`save_prior` (or ``fuzzrisk prior build``).
+
+    The header is checked against the file before anything is allocated
+    (:func:`monitor.userfiles.read_npy`); errors name the file.
+    """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(
             f"prior file {path} does not exist; build one with "
             "`fuzzrisk prior build DEPTH_DIR -o PRIOR.npy`"
         )
-    try:
-        prior = np.load(path, allow_pickle=False)
-    except (ValueError, OSError) as exc:
-        raise ValueError(f"prior file {path}: not a readable .npy array ({exc})") from exc
-    return check_prior(prior, name=str(path))
+    return check_prior(read_npy(path, "prior file"), name=f"prior file {path}")
 
 
 def check_prior(prior: np.ndarray, *, name: str = "prior") -> np.ndarray:
     """Validate a prior and return it as float32 (H, W).
 
     A prior holds mean inverse depths: finite values >= 0 in 1/m, or NaN where no training
-    sample was valid. Anything else (inf, negatives, a wrong shape or dtype) is an error.
+    sample was valid. Anything else (inf, negatives, values too large for float32 such as a
+    float64 1e300, a wrong shape or dtype) is an error.
     """
     if not isinstance(prior, np.ndarray) or prior.ndim != 2 or not np.issubdtype(prior.dtype, np.floating):
         shape = getattr(prior, "shape", None)
@@ -138,11 +142,16 @@ def check_prior(prior: np.ndarray, *, name: str = "prior") -> np.ndarray:
             f"{name}: shape {shape}, dtype {dtype}; expected a floating-point (H, W) "
             "mean inverse depth in 1/m"
         )
-    bad = np.isinf(prior) | (prior < 0)
+    with np.errstate(over="ignore"):
+        single = np.ascontiguousarray(prior, dtype=np.float32)
+    bad = np.isinf(single) | (single < 0)
     if bad.any():
+        first = tuple(int(i) for i in np.argwhere(bad)[0])
+        value = float(prior[first])
+        kind = "too large for float32 (> 3.4e38)" if np.isfinite(value) and value > 0 else "inf or negative"
         raise ValueError(
-            f"{name}: {int(bad.sum())} pixels are inf or negative (first at row, col "
-            f"{tuple(int(i) for i in np.argwhere(bad)[0])}); a prior holds mean inverse "
-            "depths >= 0, NaN where no sample"
+            f"{name}: {int(bad.sum())} pixels are inf, negative or too large for float32 (first "
+            f"at row, col {first}: {value!r}, {kind}); a prior holds mean inverse depths >= 0 in "
+            "1/m, NaN where no sample"
         )
-    return np.ascontiguousarray(prior, dtype=np.float32)
+    return single

@@ -1,4 +1,5 @@
-"""Numba kernels behind :mod:`monitor.geometry.boxes` and :mod:`monitor.alignment`.
+"""Numba kernels behind :mod:`monitor.geometry.boxes` (and the scalar measures behind
+:mod:`monitor._alignment_kernels`).
 
 Private: the public functions validate their input and then call these. Kernels never
 validate and never raise. Box rows are ``cx, cy, w, h, d``; every measure is written once,
@@ -12,7 +13,8 @@ of a box with itself is exactly 1.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 # codes returned by invalid_entry, turned into messages by monitor.geometry.boxes
 OK = 0
@@ -21,16 +23,21 @@ NEGATIVE_SIZE = 2
 NEGATIVE_DEPTH = 3
 NONPOSITIVE_DEPTH = 4
 ZERO_AREA = 5
+TOO_LARGE = 6
+
+#: largest magnitude of a box entry (pixels or metres): beyond it centre distances and
+#: areas could overflow to inf
+MAX_MAGNITUDE = 1e15
 
 
-@njit(cache=True)
+@kernel
 def _span(c, size):
     lo = c - 0.5 * size
     hi = c + 0.5 * size
     return lo, hi, hi - lo
 
 
-@njit(cache=True)
+@kernel
 def intersection_areas(a, b):
     """Intersection area and the two box areas (all from corner coordinates)."""
     ax0, ax1, aw = _span(a[0], a[2])
@@ -43,7 +50,7 @@ def intersection_areas(a, b):
     return inter, aw * ah, bw * bh
 
 
-@njit(cache=True)
+@kernel
 def iou_one(a, b):
     """IoU of two boxes; 0 when the union has no area (both boxes degenerate)."""
     inter, area_a, area_b = intersection_areas(a, b)
@@ -52,36 +59,39 @@ def iou_one(a, b):
     return inter / union if union > 0.0 else 0.0
 
 
-@njit(cache=True)
+@kernel
 def iog_one(p, g):
     """Intersection over the area of ``g``; the caller guarantees that area is > 0."""
     inter, _, area_g = intersection_areas(p, g)
     return inter / area_g
 
 
-@njit(cache=True)
+@kernel
 def rdd_one(d_p, d_s):
     """min(1, (d_p - d_s) / d_s); the caller guarantees d_s > 0 and d_p >= 0."""
     return min(1.0, (d_p - d_s) / d_s)
 
 
-@njit(cache=True)
+@kernel
 def depth_ratio_one(d_p, d_g):
     """min(1, d_g / d_p) written without the division when d_p <= d_g (so d_p = 0 gives 1)."""
     return 1.0 if d_p <= d_g else d_g / d_p
 
 
-@njit(cache=True)
+@kernel
 def invalid_entry(a, positive_depth, positive_area):
     """First offending ``(row, column, code)`` of an (n, 5) array, or ``(-1, -1, OK)``.
 
-    Checks: every entry finite; ``w, h >= 0``; ``d >= 0`` (``> 0`` if ``positive_depth``);
+    Checks: every entry finite and at most :data:`MAX_MAGNITUDE` in magnitude; ``w, h >= 0``;
+    ``d >= 0`` (``> 0`` if ``positive_depth``);
     ``x1 - x0 > 0`` and ``y1 - y0 > 0`` (the extents the measures use) if ``positive_area``.
     """
     for i in range(a.shape[0]):
         for j in range(5):
             if not np.isfinite(a[i, j]):
                 return i, j, NOT_FINITE
+            if abs(a[i, j]) > MAX_MAGNITUDE:
+                return i, j, TOO_LARGE
         for j in range(2, 4):
             if a[i, j] < 0.0:
                 return i, j, NEGATIVE_SIZE
@@ -96,31 +106,31 @@ def invalid_entry(a, positive_depth, positive_area):
     return -1, -1, OK
 
 
-@njit(cache=True)
+@kernel
 def iou_rows(a, b, out):
     for i in range(a.shape[0]):
         out[i] = iou_one(a[i], b[i])
 
 
-@njit(cache=True)
+@kernel
 def iog_rows(p, g, out):
     for i in range(p.shape[0]):
         out[i] = iog_one(p[i], g[i])
 
 
-@njit(cache=True)
+@kernel
 def rdd_rows(d_p, d_s, out):
     for i in range(d_p.shape[0]):
         out[i] = rdd_one(d_p[i], d_s[i])
 
 
-@njit(cache=True)
+@kernel
 def depth_ratio_rows(d_p, d_g, out):
     for i in range(d_p.shape[0]):
         out[i] = depth_ratio_one(d_p[i], d_g[i])
 
 
-@njit(cache=True)
+@kernel
 def centre_distances(a, b):
     """(n, m) Euclidean distances between the centres of the rows of ``a`` and ``b``."""
     bx = b[:, 0].copy()  # contiguous columns let the inner loop vectorise
@@ -135,30 +145,3 @@ def centre_distances(a, b):
             out[i, j] = np.sqrt(dx * dx + dy * dy)
     return out
 
-
-@njit(cache=True)
-def score_pairs(s, p, partner, alpha, beta, pair_iou, pair_rdd, matched):
-    """Fill the per-S alignment table (M,) given each S's partner row in P (-1: none).
-
-    An S without a partner gets IoU 0, RDD 1, not matched; a pair is matched when
-    IoU > alpha and |RDD| < beta. Returns the sums over S of the scores (IoU where
-    matched else 0, RDD where matched else 1).
-    """
-    iou_sum = 0.0
-    rdd_sum = 0.0
-    for i in range(partner.shape[0]):
-        j = partner[i]
-        if j < 0:
-            pair_iou[i] = 0.0
-            pair_rdd[i] = 1.0
-            matched[i] = False
-        else:
-            pair_iou[i] = iou_one(s[i], p[j])
-            pair_rdd[i] = rdd_one(p[j, 4], s[i, 4])
-            matched[i] = pair_iou[i] > alpha and abs(pair_rdd[i]) < beta
-        if matched[i]:
-            iou_sum += pair_iou[i]
-            rdd_sum += pair_rdd[i]
-        else:
-            rdd_sum += 1.0
-    return iou_sum, rdd_sum

@@ -14,19 +14,20 @@ outline with the image rectangle.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 N_PLANES = 11  # 6 box faces + near plane + 4 image borders
 
 
-@njit(cache=True)
+@kernel
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1],
             a[2] * b[0] - a[0] * b[2],
             a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True)
+@kernel
 def visible_extents(centres, axes, half, frustum, K, width, height, near, min_extent, out):
     """Extent of each box's visible part.
 

@@ -44,6 +44,7 @@ _PROBLEMS = {
     _k.NEGATIVE_DEPTH: "distances must be >= 0 metres",
     _k.NONPOSITIVE_DEPTH: "distances must be > 0 metres here",
     _k.ZERO_AREA: "the box must have a positive area here (w > 0 and h > 0)",
+    _k.TOO_LARGE: f"must be within +-{_k.MAX_MAGNITUDE:g} (pixels or metres; beyond, distances and areas overflow)",
 }
 
 
@@ -98,8 +99,9 @@ def as_boxes(a, name: str = "boxes", *, positive_depth: bool = False,
     Raises
     ------
     ValueError
-        Wrong dtype or shape, a non-finite entry, a negative size or distance (or one the
-        flags exclude); the message names ``name``, the row, the column and the value.
+        Wrong dtype or shape, a non-finite entry or one beyond +-1e15, a negative size or
+        distance (or one the flags exclude); the message names ``name``, the row, the
+        column and the value.
     """
     arr = _as_float_array(a, name)
     if arr.ndim != 2 or arr.shape[1] != 5:

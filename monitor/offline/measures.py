@@ -48,10 +48,7 @@ from scipy.stats import rankdata
 
 from monitor.geometry import boxes
 from monitor.offline.evaluation import Observation
-from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK
-
-#: the statuses a frame can have, in report order
-STATUSES = (OK, NO_OBJECTS, INVALID_INPUT)
+from monitor.risk_monitor import INVALID_INPUT, OK, STATUSES
 
 
 @dataclass(frozen=True)
@@ -359,7 +356,7 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
 
 def depth_view_quality(truth: Sequence[FrameTruth]) -> dict:
     """The depth view's recall and precision of ground truth within range, and the share
-    of frames per status (``ok``, ``no-objects``, ``invalid-input``)."""
+    of frames per status (each of :data:`monitor.risk_monitor.STATUSES`)."""
     gts = sum(t.gts for t in truth)
     objects = sum(t.objects for t in truth)
     n = len(truth)

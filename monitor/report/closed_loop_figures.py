@@ -10,22 +10,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib import rcParams
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from monitor.offline.closed_loop import BASELINE  # noqa: E402
+from monitor.offline.closed_loop import BASELINE
+from monitor.userfiles import save_figure
 
 
-def _save(fig, path: Path) -> None:
-    """Write beside the target, then replace it (never a half-written file)."""
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp.png")
-    fig.savefig(tmp, dpi=80)
-    plt.close(fig)
-    tmp.replace(path)
+def _subplots(ncols: int, size: tuple[float, float]):
+    """A figure on its own Agg canvas (no pyplot, no backend switch) and its axes."""
+    fig = Figure(figsize=size)
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, ncols)
+    return fig, axes
 
 
 def traces_figure(pairs, threshold: float, path: Path) -> None:
@@ -39,8 +38,8 @@ def traces_figure(pairs, threshold: float, path: Path) -> None:
         The shield's threshold, drawn on the risk panel.
     path : Path
     """
-    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
-    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig, axes = _subplots(3, (14, 3.8))
+    colours = rcParams["axes.prop_cycle"].by_key()["color"]
     for k, (base, shielded) in enumerate(pairs):
         colour = colours[k % len(colours)]
         label = f"{base.kind} {base.condition} #{base.seed}"
@@ -56,7 +55,7 @@ def traces_figure(pairs, threshold: float, path: Path) -> None:
     axes[2].set(xlabel="time (s)", ylabel="risk", ylim=(-0.02, 1.02), title="monitor risk (shielded car)")
     axes[0].legend(fontsize=7)
     fig.tight_layout()
-    _save(fig, path)
+    save_figure(fig, path, 80)
 
 
 def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
@@ -70,7 +69,7 @@ def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
         Label of the default setting (marked).
     path : Path
     """
-    fig, ax = plt.subplots(figsize=(6.5, 5))
+    fig, ax = _subplots(1, (6.5, 5))
     for point in points:
         x, y = point["false_brake_rate"], point["avoidance_rate"]
         if not (np.isfinite(x) and np.isfinite(y)):  # no drives or no collisions to measure on
@@ -86,7 +85,7 @@ def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
            title="shield settings: safety against availability")
     ax.legend(fontsize=8, loc="lower right")
     fig.tight_layout()
-    _save(fig, path)
+    save_figure(fig, path, 80)
 
 
 def condition_figure(by_condition: dict, path: Path) -> None:
@@ -101,7 +100,7 @@ def condition_figure(by_condition: dict, path: Path) -> None:
     names = list(by_condition)
     x = np.arange(len(names))
     get = lambda key: [by_condition[c]["hazard"][key] for c in names]  # noqa: E731
-    fig, ax = plt.subplots(figsize=(8, 4))
+    fig, ax = _subplots(1, (8, 4))
     ax.bar(x - 0.27, get("baseline_collision_rate"), 0.27, label="baseline collision rate", color="tab:red")
     ax.bar(x, get("shielded_collision_rate"), 0.27, label="shielded collision rate", color="tab:green")
     ax.bar(x + 0.27, np.nan_to_num(get("avoidance_rate")), 0.27, label="avoidance rate", color="tab:blue")
@@ -109,4 +108,4 @@ def condition_figure(by_condition: dict, path: Path) -> None:
     ax.set(ylim=(0, 1.05), ylabel="rate", title=f"hazard scenarios by condition ({BASELINE} vs shield)")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    _save(fig, path)
+    save_figure(fig, path, 80)

@@ -1,46 +1,45 @@
-"""Figures of the demo and the evaluation (PNG, matplotlib's Agg backend).
+"""Figures of the demo and the evaluation (PNG, drawn on matplotlib's Agg canvas).
 
 - :func:`save_fis_figure`: a rule base's membership functions and its output surface over
   (IoU~, RDD~) (paper, Fig. 4);
 - :func:`save_frame_figure`: a frame with the detector's boxes (blue), the depth view's
   boxes (yellow) and the risk (paper, Fig. 5);
 - :func:`save_risk_timeline`: risk over time per scene, with the shield threshold and the
-  offline target 1 - USC~.
+  offline target 1 - USC~;
 
 The retrieval stages (paper, Fig. 2) are drawn by :mod:`monitor.report.retrieval_figure`.
+Figures are :class:`matplotlib.figure.Figure` objects on their own Agg canvas: no pyplot, no
+global state and no switch of the user's matplotlib backend.
 """
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Sequence
 
-import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.patches import Rectangle
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402  (after choosing the backend)
-import numpy as np  # noqa: E402
-
-from fuzzcore import FuzzySystem  # noqa: E402
-from fuzzcore._kernels import mf_array  # noqa: E402
-from fuzzcore.membership import resolve_kind  # noqa: E402
+from fuzzcore import FuzzySystem
+from monitor.userfiles import save_figure
 
 DETECTOR_COLOUR = "#1f77ff"
 DEPTH_COLOUR = "#ffd400"
 
 
-def _memberships(term, x: np.ndarray) -> np.ndarray:
-    p = np.zeros(4)
-    p[:len(term.params)] = term.params
-    out = np.empty_like(x)
-    mf_array(resolve_kind(term.kind).code, p, x, out)
-    return out
+def _figure(width: float, height: float) -> Figure:
+    """A figure of ``width`` x ``height`` inches on its own Agg canvas."""
+    figure = Figure(figsize=(width, height))
+    FigureCanvasAgg(figure)
+    return figure
 
 
 def save_fis_figure(fis: FuzzySystem, path: str | Path, resolution: int = 61) -> Path:
     """Membership functions of every variable, and the output surface over the first two
     inputs (a two-input, Mamdani or Sugeno, single-output system)."""
     variables = list(fis.inputs) + list(fis.outputs)
-    fig = plt.figure(figsize=(4 * (len(variables) + 1), 3.6))
+    fig = _figure(4 * (len(variables) + 1), 3.6)
     for i, var in enumerate(variables):
         ax = fig.add_subplot(1, len(variables) + 1, i + 1)
         if fis.type == "sugeno" and var in fis.outputs:
@@ -51,7 +50,7 @@ def save_fis_figure(fis: FuzzySystem, path: str | Path, resolution: int = 61) ->
             continue
         x = np.linspace(*var.range, 401)
         for term in var.terms:
-            ax.plot(x, _memberships(term, x), label=term.name)
+            ax.plot(x, term.membership(x), label=term.name)
         ax.set_title(f"{'output' if var in fis.outputs else 'input'}: {var.name}")
         ax.set_ylim(-0.02, 1.05)
         ax.legend(fontsize=8)
@@ -70,21 +69,21 @@ def save_fis_figure(fis: FuzzySystem, path: str | Path, resolution: int = 61) ->
     fig.suptitle(f"rule base {fis.name}: {len(fis.rules)} rules, {fis.defuzzifier}")
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+    save_figure(fig, path, 90)
     return path
 
 
 def _draw_boxes(ax, boxes: np.ndarray, colour: str, label: str) -> None:
     for k, (cx, cy, w, h, d) in enumerate(boxes):
-        ax.add_patch(plt.Rectangle((cx - w / 2, cy - h / 2), w, h, fill=False, lw=1.6, ec=colour,
-                                   label=label if k == 0 else None))
+        ax.add_patch(Rectangle((cx - w / 2, cy - h / 2), w, h, fill=False, lw=1.6, ec=colour,
+                               label=label if k == 0 else None))
         ax.text(cx - w / 2, cy - h / 2 - 4, f"{d:.1f} m", color=colour, fontsize=7)
 
 
 def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = "") -> Path:
     """``image`` (H, W, 3) uint8 with P (blue), S (yellow) and the report's risk."""
-    fig, ax = plt.subplots(figsize=(10, 5.8))
+    fig = _figure(10, 5.8)
+    ax = fig.subplots()
     ax.imshow(image)
     _draw_boxes(ax, report.P, DETECTOR_COLOUR, "detector (P)")
     _draw_boxes(ax, report.S, DEPTH_COLOUR, "depth view (S)")
@@ -97,8 +96,7 @@ def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = 
         ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path, 80)
     return path
 
 
@@ -111,7 +109,8 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     n = len(series)
     cols = min(3, n)
     rows = -(-n // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.5 * cols, 2.6 * rows), squeeze=False, sharey=True)
+    fig = _figure(4.5 * cols, 2.6 * rows)
+    axes = fig.subplots(rows, cols, squeeze=False, sharey=True)
     for ax, s in zip(axes.ravel(), series):
         t = np.asarray(s["time"])
         ax.plot(t, s["risk"], "-o", ms=3, label="risk")
@@ -128,6 +127,5 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     axes[0, 0].legend(fontsize=7)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
+    save_figure(fig, path, 80)
     return path

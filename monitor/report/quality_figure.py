@@ -17,6 +17,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from monitor.userfiles import save_figure
 from monitor.offline.measures import FrameTruth, alarm_rates, auroc, roc_curve
 
 
@@ -84,5 +85,5 @@ def save_quality_figure(path: str | Path, risk: Mapping[str, np.ndarray],
         fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, 90)
     return path

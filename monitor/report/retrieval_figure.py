@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
 from monitor.depth.retrieval import RetrievalParams, RetrievalStages, Retriever
+from monitor.userfiles import write_atomic
 
 _INVALID_RGB = (0.25, 0.45, 0.85)
 
@@ -99,7 +100,7 @@ def save_retrieval_figure(path: str | Path, depth: np.ndarray, prior: np.ndarray
                                     linewidth=1.2))
         axes[3].text(cx - w / 2, cy - h / 2, f"{d:.1f} m", color="lime", fontsize=7, va="bottom")
     figure.tight_layout()
-    FigureCanvasAgg(figure).print_png(str(path))
+    write_atomic(path, FigureCanvasAgg(figure).print_png)
     return stages
 
 

@@ -6,12 +6,10 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
-_FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+from fuzzcore.jit import SYNTHETIC_IMAGE, kernel
 
 
-@njit(cache=True, fastmath=_FASTMATH)
+@kernel(fastmath=SYNTHETIC_IMAGE)
 def fade_clip_grain(depth_true, labels, background, alpha, max_depth, grain, out):
     """``out = min(depth, max_depth) * grain``, objects first blended towards the background.
 

@@ -9,12 +9,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-_FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
+from fuzzcore.jit import SYNTHETIC_IMAGE, kernel
 
 
-@njit(cache=True, fastmath=_FASTMATH)
+@kernel(fastmath=SYNTHETIC_IMAGE)
 def render(a, b, c, origin, near, boxes, box_labels, n_structure, rects, sky, ground, depth,
            labels, silhouette, depth32, visible, background32):
     """Ray-cast the ground plane z = 0 and oriented boxes into a z-buffer.
@@ -110,7 +109,7 @@ def render(a, b, c, origin, near, boxes, box_labels, n_structure, rects, sky, gr
                 visible[labels[v, u] - 1] += 1
 
 
-@njit(cache=True, fastmath=_FASTMATH)
+@kernel(fastmath=SYNTHETIC_IMAGE)
 def _round(depth, out):
     """``out = depth`` rounded to float32."""
     for v in range(depth.shape[0]):
@@ -118,7 +117,7 @@ def _round(depth, out):
             out[v, u] = depth[v, u]
 
 
-@njit(cache=True, fastmath=_FASTMATH, inline="always")
+@kernel(inline=True, fastmath=SYNTHETIC_IMAGE)
 def _slab(r, o, half, t_in, t_out):
     """Narrow [t_in, t_out] to where o + t r lies in [-half, half] (empty: t_in > t_out)."""
     if r == 0.0:

@@ -1,6 +1,10 @@
 """The Numba engine against the NumPy reference evaluator, on random systems and inputs."""
+import math
+
 import numpy as np
 from hypothesis import given, settings, strategies as st
+
+from fuzzcore import FuzzySystem, Rule, Term, Variable
 
 import reference
 from strategies import PIECEWISE, mamdani_systems, samples, sugeno_systems
@@ -19,6 +23,32 @@ def _check(system, rows):
 def test_mamdani_matches_reference(data):
     system = data.draw(mamdani_systems())
     _check(system, samples(system, 12, data.draw))
+
+
+def test_mom_of_a_probor_tie_follows_each_bit_of_exp():
+    # found by test_mamdani_matches_reference (shrunk): NOT linzmf(0, 0) is 1 on (0, 1], and
+    # probor with gaussmf(1, 0) gives 1 + g - 1*g there, which is exactly 1.0 or not depending
+    # on g's last bit; mom averages the grid points equal to the maximum, so one ulp of exp
+    # moves the answer by ~1e-3. The engine's exp (the C library's, correctly rounded here)
+    # gave 0.510617..., the reference's numpy exp (SIMD, 1 ulp low at y = 0.15, 0.3, 0.5,
+    # 0.96 on an AVX-512 CPU) gave 0.509615...
+    y0 = Variable("y0", (0.0, 1.0), (Term("g", "gaussmf", (1.0, 0.0)), Term("z", "linzmf", (0.0, 0.0))))
+    x0 = Variable("x0", (0.0, 1.0), (Term("t0", "trimf", (0.0, 0.5, 1.0)),))
+    system = FuzzySystem(name="tie", inputs=(x0,), outputs=(y0,),
+                         rules=(Rule((0,), (-2,), 1.0, "and"), Rule((0,), (1,), 1.0, "and")),
+                         aggregation="probor", defuzzifier="mom", resolution=101)
+    # by hand: both rules fire at 1 (no antecedent), min implication leaves the sets as they are
+    y = np.arange(101) / 100  # MATLAB's linspace(0, 1, 101): j * (1 - 0) / 100
+    agg = np.zeros(101)
+    for j, yj in enumerate(y):
+        a = 1.0 if yj > 0 else 0.0  # NOT linzmf(0, 0)
+        g = math.exp(-(yj * yj) / 2.0)  # gaussmf(1, 0), the C library's exp
+        agg[j] = a + g - a * g  # probor of rule 1 (onto 0, exact) then rule 2
+    at_max = y[agg == agg.max()]
+    assert 0 < len(at_max) < 101  # a genuine tie: some points round to the maximum, some not
+    want = sum(at_max.tolist()) / len(at_max)
+    np.testing.assert_allclose(system.evaluate([[0.5]]), [[want]], rtol=0, atol=1e-12)
+    _check(system, [[0.5]])
 
 
 @given(st.data())

@@ -115,3 +115,52 @@ def test_aliases_resolve_to_matlab_names():
     assert Term("a", "trapezoid", [0, 1, 2, 3]).kind == "trapmf"
     with pytest.raises(ValueError, match="unknown membership function 'triangel'"):
         Term("a", "triangel", [0, 1, 2])
+
+
+# --------------------------------------------------------------------------- Term.membership
+@given(st.sampled_from(INPUT_KINDS).flatmap(lambda k: st.tuples(st.just(k), term_params(k))),
+       st.lists(st.floats(-1.5, 1.5), min_size=1, max_size=30))
+def test_term_membership_matches_matlab_formulas(kind_params, xs):
+    kind, params = kind_params
+    term = Term("t", kind, params)
+    got = term.membership(np.array(xs))
+    assert isinstance(got, np.ndarray) and got.dtype == np.float64 and got.shape == (len(xs),)
+    np.testing.assert_allclose(got, membership(kind, params, xs), rtol=0, atol=1e-12)
+    # a scalar in gives a float out, the same number as in the array
+    first = term.membership(xs[0])
+    assert type(first) is float and first == got[0]
+
+
+@pytest.mark.parametrize("kind, params, x, expected", EDGES)
+def test_term_membership_edge_table(kind, params, x, expected):
+    assert Term("t", kind, params).membership(x) == pytest.approx(expected, abs=1e-15)
+
+
+def test_term_membership_shapes_and_nan():
+    term = Term("mid", "trimf", [0.0, 1.0, 3.0])
+    # (x - a)/(b - a) on the rise, (c - x)/(c - b) on the fall: 0.5 -> 0.5, 2.0 -> 0.5, 2.5 -> 0.25
+    x = np.array([[0.5, 2.0], [2.5, np.nan]])
+    got = term.membership(x)
+    assert got.shape == (2, 2)
+    np.testing.assert_array_equal(got[0], [0.5, 0.5])
+    assert got[1, 0] == 0.25 and np.isnan(got[1, 1])
+    assert math.isnan(term.membership(math.nan))
+    assert term.membership(np.float32(1.0)) == 1.0 and term.membership(2) == 0.5  # ints and float32
+    assert term.membership([0.5, 1.0]).tolist() == [0.5, 1.0]                   # lists
+    assert term.membership(np.arange(6.0).reshape(2, 3)[:, ::2]).tolist() == [[0.0, 0.5], [0.0, 0.0]]
+    assert term.membership(np.empty((0, 3))).shape == (0, 3)
+
+
+@pytest.mark.parametrize("x", ["0.5", None, True, np.array([True]), np.array([1 + 1j]), {"x": 1}])
+def test_term_membership_refuses_non_numbers(x):
+    with pytest.raises(TypeError, match="term 'low': x must be a real number or an array of real"):
+        Term("low", "trimf", [0, 0, 1]).membership(x)
+
+
+def test_term_membership_refuses_invalid_terms():
+    from fuzzcore import RuleBaseError
+
+    with pytest.raises(RuleBaseError, match=r"term 'bad' \(trimf \[0.0, 2.0, 1.0\]\): .*non-decreasing"):
+        Term("bad", "trimf", [0, 2, 1]).membership(0.5)
+    with pytest.raises(RuleBaseError, match="term 'c' .*constant.* is a Sugeno output"):
+        Term("c", "constant", [0.3]).membership(0.5)

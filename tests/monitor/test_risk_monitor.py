@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig
-from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, STATUSES, InvalidFrameError, RiskMonitor
+from monitor.risk_monitor import (INVALID_INPUT, NO_OBJECTS, NO_VIEW, OK, STATUSES, InvalidFrameError,
+                                   RiskMonitor)
 from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
@@ -350,9 +351,13 @@ def test_the_geometric_view_ignores_a_wall_beside_the_road(geometric_monitor, mo
     assert monitor.step(_depth(wall), np.zeros((0, 7))).status == OK  # the paper's view: an object
 
 
-def test_a_frame_the_geometric_view_cannot_see_gives_the_fail_safe(geometric_monitor, scene_depth):
-    holes = scene_depth.copy()
-    holes[500:, 500:1100] = np.nan  # the road ahead
-    report = geometric_monitor.step(holes, PEDESTRIAN)
-    assert report.status == INVALID_INPUT and report.risk == geometric_monitor.config.risk.fail_safe
-    assert "look at the corridor" in report.reason
+def test_a_frame_the_geometric_view_calls_blind_has_no_view(geometric_monitor, scene_depth):
+    pitched = geometric_monitor.camera.cam_to_ego.copy()
+    a = np.radians(-8.0)  # the camera pitched up by 8 degrees: the road reads under z = 0
+    pitched[:3, :3] = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]) \
+        @ pitched[:3, :3]
+    depth = render_depth(Camera(CAMERA.K, CAMERA.width, CAMERA.height, pitched), PEDESTRIAN).depth
+    depth = np.where(np.isfinite(depth), depth, FAR_M).astype(np.float32)
+    report = geometric_monitor.step(depth, PEDESTRIAN)
+    assert report.status == NO_VIEW and report.risk == geometric_monitor.config.risk.no_view
+    assert "under the road plane" in report.reason and len(report.P) == 1 and len(report.S) == 0

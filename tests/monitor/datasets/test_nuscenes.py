@@ -21,6 +21,7 @@ from monitor.depth.files import DepthFolder
 from monitor.datasets.nuscenes import NuScenesReader, category_to_detection_name
 from monitor.depth.prior import save_prior
 from monitor.depth.retrieval import RetrievalParams
+from monitor.depth.visibility import VisibilityParams
 from monitor.risk_monitor import OK, RiskMonitor
 from monitor.shipped import shipped_rules
 
@@ -221,7 +222,9 @@ def test_the_monitor_runs_on_a_frame(reader):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     prior = np.full((H, W), 1.0 / FAR_M, np.float32)
     # a 160 x 90 image: full resolution and small boxes (the defaults suit 1600 x 900)
-    config = MonitorConfig(retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1, min_size=4.0)))
+    # the painted frame has no road: the view check (which would call it "no ground") is off
+    config = MonitorConfig(retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1, min_size=4.0)),
+                           visibility=VisibilityParams(min_in_range_share=0.0, min_ground_ratio=0.0))
     monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, f0.camera, config)
     report = monitor.step(depth, f0.det_boxes3d, f0.det_scores)
     assert report.status == OK, report.reason
@@ -293,6 +296,20 @@ def _results(edit_results):
      r"results\[s0\]\[0\]\.sample_token: 's1', expected 's0'"),
     (_results(lambda r: r["results"].update(s0={})), ValueError, r"results\[s0\] is a dict"),
     (_results(lambda r: r.pop("meta")), ValueError, "field 'meta' is missing"),
+    # issue 13, item 17: NaN (json reads the NaN literal) and huge numbers name the file and token
+    (_set("sample_annotation", 0, "rotation", [math.nan, 0.0, 0.0, 1.0]), ValueError,
+     r"sample_annotation.json: sample_annotation\[token=a0\]\.rotation: \[nan, 0.0, 0.0, 1.0\] is not a list "
+     r"of 4 finite numbers"),
+    (_set("sample_annotation", 0, "size", [math.nan, 4.0, 1.5]), ValueError,
+     r"sample_annotation\[token=a0\]\.size: \[nan, 4.0, 1.5\] is not a list of 3 finite numbers"),
+    (_set("ego_pose", 0, "translation", [10**400, 0, 0]), ValueError,
+     r"ego_pose\[token=ep0\]\.translation: .* is not a list of 3 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(rotation=[math.nan] * 4)), ValueError,
+     r"results\[s0\]\[0\]\.rotation: \[nan, nan, nan, nan\] is not a list of 4 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(size=[1.0, math.inf, 1.0])), ValueError,
+     r"results\[s0\]\[0\]\.size: \[1.0, inf, 1.0\] is not a list of 3 finite numbers"),
+    (_results(lambda r: r["results"]["s0"][0].update(detection_score=math.nan)), ValueError,
+     r"results\[s0\]\[0\]\.detection_score: nan is not a finite number"),
 ])
 def test_malformed_input_is_a_clear_error(tmp_path, edit, error, message):
     tabs, res = tables(), results()
@@ -353,7 +370,9 @@ def test_features_command_runs_on_nuscenes(tmp_path, capsys):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     np.save(kwargs["depth"] / "n000__CAM_FRONT__0.npy", depth)
     save_prior(tmp_path / "prior.npy", np.full((H, W), 1.0 / FAR_M, np.float32))
-    (tmp_path / "config.yaml").write_text("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n")
+    (tmp_path / "config.yaml").write_text("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
+                                          # no road: view check off
+                                          "visibility:\n  min_in_range_share: 0.0\n  min_ground_ratio: 0.0\n")
     out = tmp_path / "f.csv"
     argv = ["features", "-o", str(out), "--split", "all", "--config", str(tmp_path / "config.yaml"),
             "--nuscenes", str(tmp_path), "--version", VERSION, "--detections", str(kwargs["detections"]),

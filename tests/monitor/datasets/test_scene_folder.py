@@ -122,7 +122,7 @@ def _write_and_edit(tmp_path, scene, edit):
 
 @pytest.mark.parametrize("edit, message", [
     (lambda d: d["frames"][0]["annotations"][1].update(size=[1.0, 2.0]),
-     r"frames\[0\]\.annotations\[1\]\.size: \[1\.0, 2\.0\] is not a list of 3 numbers"),
+     r"frames\[0\]\.annotations\[1\]\.size: \[1\.0, 2\.0\] is not a list of 3 finite numbers"),
     (lambda d: d["frames"][1]["detections"][0].update(detection_score=1.5),
      r"frames\[1\]: det_scores\[0\] = 1\.5, must be in \[0, 1\]"),
     (lambda d: d["frames"][0]["annotations"][0].pop("category_name"),

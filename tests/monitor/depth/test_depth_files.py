@@ -50,7 +50,7 @@ def test_npy_that_is_not_an_array(tmp_path):
     with pytest.raises(ValueError, match="archive"):
         load_depth(tmp_path / "arch.npy")
     np.save(tmp_path / "obj.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
-    with pytest.raises(ValueError, match="obj.npy: not a readable"):
+    with pytest.raises(ValueError, match="obj.npy: dtype object holds Python objects"):
         load_depth(tmp_path / "obj.npy")
 
 
@@ -72,7 +72,7 @@ def test_png_wrong_kind(tmp_path):
     with pytest.raises(ValueError, match=r"rgb.png: image has shape \(3, 3, 3\)"):
         load_depth(tmp_path / "rgb.png")
     (tmp_path / "junk.png").write_bytes(b"junk")
-    with pytest.raises(ValueError, match="junk.png: OpenCV cannot decode"):
+    with pytest.raises(ValueError, match="junk.png: not a PNG image"):
         load_depth(tmp_path / "junk.png")
     assert cv2.imwrite(str(tmp_path / "ok.png"), np.ones((3, 3), np.uint16))
     with pytest.raises(ValueError, match="png_scale = 0"):

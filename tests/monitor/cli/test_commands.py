@@ -1,0 +1,86 @@
+"""Smoke tests of eval and convert end to end: small sizes, real outputs checked against what
+they must equal (simulate's are in test_simulate.py, convert's refusals in tests/hostile)."""
+import csv
+import json
+import struct
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fuzzcore
+from monitor.cli import main
+
+# a tiny synthetic benchmark: two nominal scenes of two frames, one of them held out
+SMALL = ["--scenes", "2", "--test-scenes", "1", "--frames", "2", "--prior-scenes", "1",
+         "--conditions", "nominal"]
+
+
+def _png_size(path):
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    return struct.unpack(">II", data[16:24])
+
+
+def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, capsys):
+    out = tmp_path / "eval"
+    assert main(["eval", "-o", str(out), *SMALL]) == 0
+    printed = capsys.readouterr().out
+    assert "synthetic" in printed and "Table I" in printed and "Table III" in printed
+    report = (out / "report.md").read_text()
+    for title in ("Table I", "Table II", "Table III", "held-out test scenes"):
+        assert title in report
+    tables = json.loads((out / "tables.json").read_text())
+    assert "synthetic" in tables["note"]
+    assert [(r["alpha"], r["beta"]) for r in tables["correlation"]] == [(0.5, 0.1), (0.3, 0.2)]
+    assert all(r["frames"] <= 4 for r in tables["correlation"])  # 2 scenes of 2 frames
+    recall = tables["recall"]
+    assert [(r["condition"], r["setting"]) for r in recall] == [("nominal", "(0.5, 0.1)"),
+                                                                ("nominal", "(0.3, 0.2)")]
+    assert recall[0]["gts"] == recall[1]["gts"] > 0  # 4 frames of a street have ground truth
+    (analysis,) = tables["analysis"]
+    assert analysis["gts"] == analysis["tps"] + analysis["fns"] == recall[1]["gts"]
+    assert analysis["approved_tps"] <= analysis["tps"] and analysis["identified_fns"] <= analysis["fns"]
+    shipped = sorted(p.name for p in Path("rules").glob("*.yaml"))
+    assert sorted(r["rules"] for r in tables["rmse"]) == shipped
+
+    # the same RMSE another way: the held-out scene's feature table through the rule base
+    features = tmp_path / "test.csv"
+    assert main(["features", "-o", str(features), "--split", "test", *SMALL]) == 0
+    with open(features) as f:
+        rows = [r for r in csv.DictReader(f) if r["target"] != ""]
+    fis = fuzzcore.load("rules/fuzzrisk.yaml")
+    err = np.array([fis.infer(float(r["iou"]), float(r["rdd"])) - float(r["target"]) for r in rows])
+    row = next(r for r in tables["rmse"] if r["rules"] == "fuzzrisk.yaml")
+    assert row["frames"] == len(rows)
+    if rows:
+        assert row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
+        assert row["mae"] == pytest.approx(float(np.mean(np.abs(err))), rel=1e-12)
+
+
+def test_eval_refuses_an_empty_rules_folder(tmp_path, capsys):
+    assert main(["eval", "-o", str(tmp_path / "e"), "--rules-dir", str(tmp_path), *SMALL]) == 2
+    assert f"no rule bases (.yaml, .fis) in {tmp_path}" in capsys.readouterr().err
+
+
+def test_convert_round_trip_keeps_every_output(tmp_path, capsys):
+    fis_path, back = tmp_path / "fuzzrisk.fis", tmp_path / "back.yaml"
+    assert main(["convert", "rules/fuzzrisk.yaml", str(fis_path)]) == 0
+    assert main(["convert", str(fis_path), str(back)]) == 0
+    printed = capsys.readouterr().out
+    assert f"{fis_path} -> {back}: mamdani system 'fuzzrisk', 2 input(s), 1 output(s), 9 rule(s)" in printed
+    assert "[System]" in fis_path.read_text()
+    original, converted = fuzzcore.load("rules/fuzzrisk.yaml"), fuzzcore.load(back)
+    X = np.stack(np.meshgrid(np.linspace(0, 1, 21), np.linspace(-1, 1, 21)), -1).reshape(-1, 2)
+    np.testing.assert_array_equal(converted.evaluate(X), original.evaluate(X))
+
+
+def test_convert_warns_about_renamed_names(tmp_path, capsys):
+    source = tmp_path / "a.fis"
+    assert main(["convert", "rules/fuzzrisk.yaml", str(source)]) == 0
+    spaced = tmp_path / "b.fis"
+    spaced.write_text(source.read_text().replace("Name='iou'", "Name='io u'"))
+    assert main(["convert", str(spaced), str(tmp_path / "b.yaml")]) == 0
+    err = capsys.readouterr().err
+    assert "warning:" in err and "'io u'" in err and "renamed 'io_u'" in err
+    assert list(fuzzcore.load(tmp_path / "b.yaml").input_names) == ["io_u", "rdd"]
