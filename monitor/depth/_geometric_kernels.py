@@ -3,21 +3,22 @@
 The kernels trust their inputs (the public class validates them: C-contiguous arrays of the
 stated dtypes and shapes) and never raise. A depth is valid when it is finite and > 0; a
 block whose depth reads 0 has no valid pixel. The per-block arrays are (rows, cols) grids of
-``stride x stride`` pixel blocks, or their flat (rows * cols,) views. ``error_model="numpy"``
-lets a division follow IEEE rules instead of testing for zero; no fastmath, so NaN and inf
-keep their meaning.
+``stride x stride`` pixel blocks, or their flat (rows * cols,) views. Compiled with
+:mod:`fuzzcore.jit`'s options: a division follows IEEE rules instead of testing for zero, and
+no fastmath, so NaN and inf keep their meaning.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from numba import njit
+
+from fuzzcore.jit import kernel
 
 _INF = np.float32(np.inf)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def block_points(depth, stride, edge_spread, M, origin, xs, ys, zs, ds, invalid_px):
     """One depth per block, back-projected through the block's centre.
 
@@ -89,7 +90,7 @@ def block_points(depth, stride, edge_spread, M, origin, xs, ys, zs, ds, invalid_
     return n_invalid
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _lateral(x, y, centre_y, tan_heading, step):
     """Lateral offset of ``(x, y)`` from the corridor's centreline (its tangent line at the
     middle of the point's table row, see :meth:`monitor.geometry.corridor.Corridor.table`),
@@ -103,7 +104,7 @@ def _lateral(x, y, centre_y, tan_heading, step):
     return abs(y - centre_y[k] - t * (x - (k + 0.5) * step)) / math.sqrt(1.0 + t * t)
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def footprint_invalid(ground_x, ground_y, ground_d, invalid_px, block_px, max_range,
                       centre_y, tan_heading, step, half_width):
     """Pixels and invalid pixels of the blocks that look at the corridor's ground.
@@ -124,7 +125,7 @@ def footprint_invalid(ground_x, ground_y, ground_d, invalid_px, block_px, max_ra
     return n_px, n_invalid
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def ground_candidates(xs, ys, zs, ds, x_max, band0, band_slope, out):
     """Flat indices of the blocks that may be road: valid, ``0 <= x <= x_max`` and
     ``|z| <= band0 + band_slope * sqrt(x^2 + y^2)`` (the nominal plane's band that every
@@ -140,7 +141,7 @@ def ground_candidates(xs, ys, zs, ds, x_max, band0, band_slope, out):
     return n
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def ransac_plane(xs, ys, zs, idx, n, uniforms, n_score, tol, max_slope, max_offset):
     """The plane ``z = a x + b y + c`` through three candidates with the most inliers
     (float64 arithmetic on the float32 points).
@@ -180,7 +181,7 @@ def ransac_plane(xs, ys, zs, idx, n, uniforms, n_score, tol, max_slope, max_offs
     return best_a, best_b, best_c, best
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
     """Least-squares ``z = a x + b y + c`` over the candidates within ``tol`` of the plane
     given. Returns ``(a, b, c, inliers)``: the refit (the plane given if the inliers do not
@@ -212,7 +213,7 @@ def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
     return da / det, db / det, dc / det, count
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
              centre_y, tan_heading, step, half_width, obstacle, corridor):
     """Which blocks stand above the road, and which of those are inside the corridor.
@@ -241,7 +242,7 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
     return n_valid, n_below
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _find(parent, i):
     while parent[i] != i:
         parent[i] = parent[parent[i]]  # path halving
@@ -249,7 +250,7 @@ def _find(parent, i):
     return i
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@kernel(inline=True)
 def _union(parent, i, j):
     ri, rj = _find(parent, i), _find(parent, j)
     if ri < rj:
@@ -258,7 +259,7 @@ def _union(parent, i, j):
         parent[ri] = rj
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
     """Objects as connected components of an occupancy grid on the ground.
 
@@ -310,7 +311,7 @@ def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
     return n
 
 
-@njit(cache=True, error_model="numpy")
+@kernel
 def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
     """Per component: its extent, sizes, nearest corridor point and a robust depth.
 
