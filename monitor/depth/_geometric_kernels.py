@@ -105,24 +105,23 @@ def _lateral(x, y, centre_y, tan_heading, step):
 
 
 @kernel
-def footprint_invalid(ground_x, ground_y, ground_d, invalid_px, block_px, max_range,
-                      centre_y, tan_heading, step, half_width):
-    """Pixels and invalid pixels of the blocks that look at the corridor's ground.
+def footprint_blocks(ground_x, ground_y, ground_d, max_range, centre_y, tan_heading, step,
+                     half_width, out):
+    """The blocks that look at the corridor's ground.
 
     ``ground_x, ground_y, ground_d`` (flat float64) are where each block's centre ray meets
     the nominal ground plane (ego x, y, camera depth; ``ground_d`` inf where it does not).
     A block looks at the corridor when ``ground_d <= max_range`` and the lateral offset of
-    its ground point is at most ``half_width``. ``invalid_px``, ``block_px`` (flat int32):
-    invalid and all pixels per block. Returns ``(pixels, invalid pixels)`` of those blocks.
+    its ground point is at most ``half_width``. Their flat indices are written to the start
+    of ``out`` (int64); returns how many.
     """
-    n_px = 0
-    n_invalid = 0
+    n = 0
     for k in range(ground_d.shape[0]):
         if ground_d[k] <= max_range and \
                 _lateral(ground_x[k], ground_y[k], centre_y, tan_heading, step) <= half_width:
-            n_px += block_px[k]
-            n_invalid += invalid_px[k]
-    return n_px, n_invalid
+            out[n] = k
+            n += 1
+    return n
 
 
 @kernel

@@ -315,6 +315,16 @@ class GeometricRetriever:
         self._x_end = float(max(high[0], CORRIDOR_STEP_M))
         self._default_corridor = Corridor(params.corridor_half_width)
         self._default_table = self._default_corridor.table(self._x_end, CORRIDOR_STEP_M)
+        self._default_footprint = self._footprint(self._default_corridor, self._default_table)
+
+    def _footprint(self, corridor: Corridor, table) -> tuple[np.ndarray, int]:
+        """The blocks that look at ``corridor``'s road within ``max_range`` (by the mounting's
+        ground plane), and how many pixels they hold."""
+        out = np.empty(self._ground_d.size, dtype=np.int64)
+        n = kernels.footprint_blocks(self._ground_x, self._ground_y, self._ground_d,
+                                     self.params.max_range, *table, CORRIDOR_STEP_M,
+                                     corridor.half_width, out)
+        return out[:n].copy(), int(self._block_px[out[:n]].sum())
 
     def _scratch(self) -> threading.local:
         """This thread's buffers (made on its first frame)."""
@@ -361,8 +371,10 @@ class GeometricRetriever:
         params, cam = self.params, self.camera
         if corridor is None:
             corridor, table = self._default_corridor, self._default_table
+            footprint = self._default_footprint
         elif isinstance(corridor, Corridor):
             table = corridor.table(self._x_end, CORRIDOR_STEP_M)
+            footprint = self._footprint(corridor, table)
         else:
             raise ValueError(f"corridor is a {type(corridor).__name__}, expected a Corridor or None")
         centre_y, tan_heading = table
@@ -373,10 +385,8 @@ class GeometricRetriever:
         invalid_fraction = n_invalid / depth.size
         if invalid_fraction > params.max_invalid_fraction:
             raise BlindViewError("invalid", invalid_fraction, params.max_invalid_fraction)
-        n_px, n_px_invalid = kernels.footprint_invalid(
-            self._ground_x, self._ground_y, self._ground_d, scratch.invalid_px.ravel(), self._block_px,
-            params.max_range, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width)
-        corridor_invalid = n_px_invalid / n_px if n_px else 0.0
+        blocks, n_px = footprint
+        corridor_invalid = int(scratch.invalid_px.ravel()[blocks].sum()) / n_px if n_px else 0.0
         if corridor_invalid > params.max_corridor_invalid_fraction:
             raise BlindViewError("corridor_invalid", corridor_invalid,
                                  params.max_corridor_invalid_fraction)

@@ -339,6 +339,21 @@ def test_classify_equals_numpy():
     assert 0 < inside.sum() < expected.sum()
 
 
+def test_footprint_blocks_equals_numpy():
+    rng = np.random.default_rng(4)
+    gx, gy = rng.uniform(-2.0, 40.0, 3000), rng.uniform(-6.0, 6.0, 3000)
+    gd = np.where(rng.random(3000) < 0.2, np.inf, gx * 1.1)  # no ground hit above the horizon
+    centre, tan = Corridor(1.75, curvature=-0.02).table(40.0, CORRIDOR_STEP_M)
+    out = np.empty(3000, dtype=np.int64)
+    n = kernels.footprint_blocks(gx, gy, gd, 20.0, centre, tan, CORRIDOR_STEP_M, 1.75, out)
+    row = np.clip((gx / CORRIDOR_STEP_M).astype(int), 0, centre.size - 1)
+    lateral = np.abs(gy - centre[row] - tan[row] * (gx - (row + 0.5) * CORRIDOR_STEP_M)) \
+        / np.hypot(1.0, tan[row])
+    expected = np.flatnonzero((gd <= 20.0) & (gx >= 0) & (lateral <= 1.75))
+    assert 0 < expected.size < 3000
+    np.testing.assert_array_equal(out[:n], expected)
+
+
 def _label_numpy(xs, ys, obstacle, x0, y0, cell, shape):
     """Occupancy grid labelled by scipy (8-connected), numbered by first block (row-major)."""
     gi = np.clip(np.floor((xs - x0) / cell).astype(int), 0, shape[0] - 1)
