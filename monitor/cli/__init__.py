@@ -32,6 +32,8 @@ COMMANDS = {
                                  "(patternsearch), rules (pso) or both (joint)"),
     "bench": ("monitor.cli.bench",
               "measure the latency of a rule base (or of the monitor) against a real-time budget"),
+    "monitor": ("monitor.cli.monitor", "run the monitor over recordings (yours, nuScenes, synthetic): "
+                                       "per-frame reports, timelines, summary"),
     "check": ("monitor.cli.check", "verify a rule base: coverage of the input box, monotonicity, "
                                    "output range, rules and terms"),
     "plot": ("monitor.cli.plot", "draw a rule base's terms and output surface, with uncovered and "

@@ -30,13 +30,13 @@ from pathlib import Path
 from tqdm import tqdm
 
 import fuzzcore
-from monitor.cli.scenes import add_scene_arguments, count_frames, select_scenes
+from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
-                                observe_scenes, recall_table, rmse_table)
+                                recall_table, rmse_table)
 from monitor.offline.measures import HazardCriterion, frame_truth, quality_tables, training_mean
+from monitor.offline.run import observe_plans
 from monitor.report.quality_figure import save_quality_figure
-from monitor.risk_monitor import RiskMonitor
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
 from monitor.userfiles import check_output_folder, write_text
@@ -75,6 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--hazard-dr", type=float, default=0.8,
                         help="... and DR = min(1, d_G / d_P) > this (default %(default)s)")
     add_scene_arguments(parser, default_scenes=6, default_test=2)
+    add_parallel_arguments(parser)
 
 
 def _by_condition(observations):
@@ -103,9 +104,8 @@ def run(args: argparse.Namespace) -> int:
     bar = tqdm(total=count_frames(args, None), unit="frame", desc="eval", disable=None)
     selection = select_scenes(args, None, progress=bar.update)
     config = load_config(args.config)
-    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), selection.prior, selection.camera, config,
-                          explain=False)
-    observations = observe_scenes(monitor, selection.scenes, progress=bar.update)
+    observations = observe_plans(run_spec(args, selection, config), selection.scenes, workers=args.workers,
+                                 ray=args.ray, progress=bar.update)
     bar.close()
     test_names = {s.name for s in selection.scenes if s.split == "test"}
     folder = Path(args.rules_dir) if args.rules_dir else rules_dir()

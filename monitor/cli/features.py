@@ -16,13 +16,11 @@ import io
 import numpy as np
 from tqdm import tqdm
 
-import fuzzcore
-from monitor.cli.scenes import add_scene_arguments, count_frames, select_scenes
+from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
-from monitor.offline.evaluation import feature_rows, observe_scenes
-from monitor.risk_monitor import RiskMonitor
+from monitor.offline.evaluation import feature_rows
+from monitor.offline.run import observe_plans
 from monitor.userfiles import check_output, write_text
-from monitor.shipped import shipped_rules
 
 FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
 
@@ -34,17 +32,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="synthetic scenes to use (default %(default)s)")
     parser.add_argument("--config", default=None, help="monitor configuration YAML (default: shipped defaults)")
     add_scene_arguments(parser, default_scenes=10, default_test=4)
+    add_parallel_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
-    read = [p for p in (args.config, args.prior, args.detections, args.depth_dir, *(args.scene_dir or ())) if p]
+    read = [p for p in (args.config, args.prior, args.detections, args.depth_dir, *(args.scene_dir or ()),
+                        *(args.recording or ())) if p]
     check_output(args.output, (".csv",), read, args.overwrite, what="features table")
     split = None if args.split == "all" else args.split
     bar = tqdm(total=count_frames(args, split), unit="frame", desc="features", disable=None)
     selection = select_scenes(args, split, progress=bar.update)
-    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), selection.prior, selection.camera,
-                          load_config(args.config), explain=False)
-    observations = observe_scenes(monitor, selection.scenes, progress=bar.update)
+    observations = observe_plans(run_spec(args, selection, load_config(args.config)), selection.scenes,
+                                 workers=args.workers, ray=args.ray, progress=bar.update)
     bar.close()
     rows = feature_rows(observations)
     text = io.StringIO(newline="")

@@ -2,15 +2,17 @@
 
 Streams the depth maps of DEPTH_DIR (``.npy`` metres or 16-bit ``.png``, see
 :mod:`monitor.depth.files`) in sorted frame order through :class:`monitor.depth.prior.InverseDepthPrior`
-(constant memory) and writes the per-pixel mean of 1/D over valid samples as float32
-``.npy`` (1/m, NaN where no frame had a valid depth).
+(constant memory; in parts on ``--workers`` processes or ``--ray``, the same prior bit for
+bit) and writes the per-pixel mean of 1/D over valid samples as float32 ``.npy`` (1/m, NaN
+where no frame had a valid depth).
 
 The output is checked before any map is read: it ends in ``.npy``, its folder exists, it
 is not inside DEPTH_DIR (a prior written there would be read as a depth map by the next
 run), and an existing file is replaced only with ``--overwrite``; it is written whole or not
-at all. A file in DEPTH_DIR whose median valid value is below :data:`MIN_MEDIAN_DEPTH_M`
-(1 m) is refused, naming it: as metres the whole view would be within reach of the
-camera, so it is an inverse depth in 1/m, such as a prior from an earlier run.
+at all. A file in DEPTH_DIR whose median valid value is below
+:data:`monitor.depth.prior.MIN_MEDIAN_DEPTH_M` (1 m) is refused, naming it: as metres the
+whole view would be within reach of the camera, so it is an inverse depth in 1/m, such as a
+prior from an earlier run.
 """
 from __future__ import annotations
 
@@ -20,11 +22,9 @@ import numpy as np
 from tqdm import tqdm
 
 from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
-from monitor.depth.prior import build_prior, save_prior
+from monitor.cli.scenes import add_parallel_arguments
+from monitor.depth.prior import prior_of_files, save_prior
 from monitor.userfiles import check_output
-
-#: A training map whose median valid value is below this many metres is refused (see above).
-MIN_MEDIAN_DEPTH_M = 1.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -41,20 +41,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     build.add_argument("--overwrite", action="store_true", help="replace PRIOR.npy if it exists")
     build.add_argument("--png-scale", type=float, default=KITTI_PNG_SCALE,
                        help="stored PNG value per metre (default %(default)g, KITTI)")
-
-
-def training_depth(folder: DepthFolder, frame: str) -> np.ndarray:
-    """The depth map of ``frame``, refused (ValueError naming the file) when its median
-    valid value is below :data:`MIN_MEDIAN_DEPTH_M`: not metres but 1/m (a prior?)."""
-    depth = folder[frame]
-    valid = depth[np.isfinite(depth) & (depth > 0)]
-    if valid.size and np.median(valid) < MIN_MEDIAN_DEPTH_M:
-        raise ValueError(
-            f"{folder.path(frame)}: median valid value {float(np.median(valid)):.3g} is below "
-            f"{MIN_MEDIAN_DEPTH_M:g} m: not a depth map in metres but an inverse depth in 1/m "
-            "(a prior from an earlier run?); move it out of the depth folder"
-        )
-    return depth
+    add_parallel_arguments(build)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -63,8 +50,10 @@ def run(args: argparse.Namespace) -> int:
     folder = DepthFolder(args.depth_dir, png_scale=args.png_scale)
     if len(folder) == 0:
         raise ValueError(f"no depth maps (.npy or .png) in {folder.root}")
-    frames = tqdm(folder.frames, unit="frame", desc="prior", disable=None)
-    accumulator = build_prior((str(folder.path(frame)), training_depth(folder, frame)) for frame in frames)
+    bar = tqdm(total=len(folder), unit="frame", desc="prior", disable=None)
+    accumulator = prior_of_files([folder.path(frame) for frame in folder.frames], folder.png_scale,
+                                 workers=args.workers, ray=args.ray, progress=bar.update)
+    bar.close()
     save_prior(args.output, accumulator.mean())
     count = accumulator.count
     height, width = accumulator.shape

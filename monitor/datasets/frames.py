@@ -10,12 +10,14 @@ The label map (int16, ``(H, W)``) says what each pixel of the true depth shows:
 :data:`LABEL_SKY`, :data:`LABEL_ROAD`, :data:`LABEL_MARKING`, :data:`LABEL_SIDEWALK` (with the
 curbs), :data:`LABEL_STRUCTURE` (buildings, fences, poles, vegetation: not ground truth), or
 ``k + 1`` for ground-truth box ``k`` of the frame.
-On disk they are scene folders (:mod:`monitor.datasets.scene_folder`).
+On disk they are scene folders (:mod:`monitor.datasets.scene_folder`). A :class:`FrameRecord` is a
+frame before its depth map is read or estimated (what a dataset run hands to its workers).
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -175,3 +177,97 @@ class Scene:
     seed: int | None
     synthetic: bool
     frames: tuple[Frame, ...]
+
+
+@dataclass(frozen=True, eq=False)
+class FrameRecord:
+    """A frame before its depth map is read or estimated: what a run sends to its workers.
+
+    Everything of a :class:`Frame` but the maps, and where the depth map comes from: a
+    file (``depth_path``), a camera image for a depth network (``image_path``), or an
+    array already in memory (``depth``, the synthetic scenes). Light and picklable, so a
+    dataset's frames can be listed up front and processed in other processes.
+
+    Attributes
+    ----------
+    scene : str
+        Name of the scene the frame belongs to.
+    key : str
+        The frame's name within its source: the depth map's and image's file stem (nuScenes:
+        the camera image's stem; the recording folder: the frame key).
+    index, timestamp, ego_speed, camera
+        As in :class:`Frame`.
+    det_boxes3d, det_classes, det_scores
+        As in :class:`Frame`.
+    gt_boxes3d, gt_classes, gt_ids, gt_visibility
+        As in :class:`Frame`; empty when the source has no ground truth.
+    has_ground_truth : bool
+        False when the source has no ground truth at all (reports then give no target),
+        as opposed to ground truth with nothing in view.
+    depth_path : Path or None
+        A depth file (:func:`monitor.depth.files.load_depth`).
+    png_scale : float
+        Stored value per metre of a PNG ``depth_path``.
+    image_path : Path or None
+        The camera image (for a depth network).
+    depth : ndarray of shape (H, W), float32, or None
+        The depth map itself.
+    token : str or None
+        The source's own id of the frame (nuScenes: the sample token).
+    """
+
+    scene: str
+    key: str
+    index: int
+    timestamp: float
+    ego_speed: float
+    camera: Camera
+    det_boxes3d: np.ndarray
+    det_classes: np.ndarray
+    det_scores: np.ndarray
+    gt_boxes3d: np.ndarray
+    gt_classes: np.ndarray
+    gt_ids: np.ndarray
+    gt_visibility: np.ndarray
+    has_ground_truth: bool
+    depth_path: Path | None = None
+    png_scale: float = 256.0
+    image_path: Path | None = None
+    depth: np.ndarray | None = None
+    token: str | None = None
+
+    @classmethod
+    def of_frame(cls, frame: Frame, scene: str, *, has_ground_truth: bool = True) -> "FrameRecord":
+        """The record of a frame in memory (its depth map carried along)."""
+        return cls(scene=scene, key=f"{frame.index:06d}", index=frame.index, timestamp=frame.timestamp,
+                   ego_speed=frame.ego_speed, camera=frame.camera, det_boxes3d=frame.det_boxes3d,
+                   det_classes=frame.det_classes, det_scores=frame.det_scores,
+                   gt_boxes3d=frame.gt_boxes3d, gt_classes=frame.gt_classes, gt_ids=frame.gt_ids,
+                   gt_visibility=frame.gt_visibility, has_ground_truth=has_ground_truth,
+                   depth=frame.depth_est)
+
+    @property
+    def name(self) -> str:
+        """How messages name the frame: scene, index and key (and token when there is one)."""
+        token = f", sample {self.token!r}" if self.token else ""
+        return f"scene {self.scene!r} frame {self.index} ({self.key}{token})"
+
+    def to_frame(self, depth: np.ndarray, source: str) -> Frame:
+        """The :class:`Frame` with ``depth`` as its estimated depth map.
+
+        ``source`` names where the depth came from (a file, an image) in the errors.
+
+        Raises
+        ------
+        ValueError
+            A depth map that is not float32 metres of the camera's size, or a malformed
+            field; the message names the frame and ``source``.
+        """
+        try:
+            return Frame(index=self.index, timestamp=self.timestamp, ego_speed=self.ego_speed,
+                         camera=self.camera, depth_est=depth, depth_true=None, labels=None,
+                         gt_boxes3d=self.gt_boxes3d, gt_classes=self.gt_classes, gt_ids=self.gt_ids,
+                         gt_visibility=self.gt_visibility, det_boxes3d=self.det_boxes3d,
+                         det_classes=self.det_classes, det_scores=self.det_scores)
+        except ValueError as exc:
+            raise ValueError(f"{self.name}, depth from {source}: {exc}") from exc

@@ -63,7 +63,7 @@ from monitor.geometry.camera import Camera, project_boxes
 from monitor.geometry.poses import invert_pose, pose_matrix
 from monitor.depth.files import DepthFolder
 from monitor.datasets.fields import JsonFields
-from monitor.datasets.frames import Frame
+from monitor.datasets.frames import Frame, FrameRecord
 
 #: nuScenes category name -> detection class (the devkit's ``category_to_detection_name``);
 #: categories not listed (animals, strollers, debris, ...) have no detection class.
@@ -161,8 +161,8 @@ def _visibility_fractions(table: dict[str, JsonFields]) -> dict[str, float]:
 
 
 @dataclass(frozen=True)
-class _Detections:
-    """The results file: boxes per sample token, already parsed (global frame)."""
+class DetectionResults:
+    """A detection-results file: boxes per sample token, already parsed (global frame)."""
 
     path: Path
     boxes: dict[str, np.ndarray]   # (m, 7) global boxes x, y, z, w, l, h, yaw
@@ -170,7 +170,14 @@ class _Detections:
     scores: dict[str, np.ndarray]
 
 
-def _read_detections(path: Path, samples: dict[str, JsonFields]) -> _Detections:
+def read_detection_results(path: Path, samples, *, tokens_file: str = "the tables' sample.json"
+                           ) -> DetectionResults:
+    """Read a results file in the nuScenes detection format (the module docstring).
+
+    ``samples`` holds the known sample tokens (a token in the results that is not among
+    them is an error that names ``tokens_file``, where the known tokens come from).
+    """
+    path = Path(path)
     data = _load_json(path, "detection results file")
     top = JsonFields(data, "results file", path)
     top.get("meta")
@@ -181,7 +188,7 @@ def _read_detections(path: Path, samples: dict[str, JsonFields]) -> _Detections:
     unknown = [t for t in results if t not in samples]
     if unknown:
         raise ValueError(f"{path}: results has {len(unknown)} sample tokens that are not in "
-                         f"the tables' sample.json, first {unknown[0]!r}: results from another "
+                         f"{tokens_file}, first {unknown[0]!r}: results from another "
                          "version or split?")
     boxes, classes, scores = {}, {}, {}
     for token, records in results.items():
@@ -202,7 +209,7 @@ def _read_detections(path: Path, samples: dict[str, JsonFields]) -> _Detections:
         boxes[token] = _global_boxes(entries, path)
         classes[token] = np.array([e.string("detection_name") for e in entries], dtype=str)
         scores[token] = np.array([e.number("detection_score") for e in entries], dtype=np.float64)
-    return _Detections(path, boxes, classes, scores)
+    return DetectionResults(path, boxes, classes, scores)
 
 
 def _global_boxes(records: list[JsonFields], path: Path) -> np.ndarray:
@@ -264,8 +271,17 @@ class NuScenesScene:
         return (self.frame(i) for i in range(len(self.samples)))
 
     def frame(self, i: int) -> Frame:
-        """Frame ``i`` (the scene's ``i``-th sample)."""
+        """Frame ``i`` (the scene's ``i``-th sample), its depth map read from the depth folder."""
         return self._reader._frame(self, i)
+
+    def record(self, i: int) -> FrameRecord:
+        """Frame ``i`` before its depth is read: the depth file (when the reader has a depth
+        folder) and the camera image ``DATAROOT/filename``."""
+        return self._reader._record(self, i)
+
+    def records(self) -> list[FrameRecord]:
+        """The records of every frame, in time order."""
+        return [self.record(i) for i in range(len(self.samples))]
 
     def __repr__(self) -> str:
         return f"NuScenesScene({self.name!r}, {len(self)} samples)"
@@ -283,8 +299,9 @@ class NuScenesReader:
     version : str, default "v1.0-trainval"
     detections : str or Path
         A detection-results JSON file (nuScenes detection-evaluation format).
-    depth : DepthFolder, str or Path
-        Depth maps keyed by the camera image's file stem.
+    depth : DepthFolder, str, Path or None
+        Depth maps keyed by the camera image's file stem; None when the depth is to be
+        estimated from the camera images (then only :meth:`NuScenesScene.record` works).
     camera : str, default "CAM_FRONT"
         The camera channel (``sensor.channel``).
     condition : str, default "nuscenes"
@@ -317,8 +334,9 @@ class NuScenesReader:
             raise FileNotFoundError(f"nuScenes tables folder {folder} (dataroot / version) "
                                     "does not exist")
         self.folder = folder
+        self.dataroot = Path(dataroot)
         self.channel = camera
-        self.depth = depth if isinstance(depth, DepthFolder) else DepthFolder(depth)
+        self.depth = depth if depth is None or isinstance(depth, DepthFolder) else DepthFolder(depth)
         t = {name: _load_table(folder, name) for name in TABLES}
         self._t = t
         self._visibility = _visibility_fractions(t["visibility"])
@@ -336,7 +354,7 @@ class NuScenesReader:
         self._annotations: dict[str, list[JsonFields]] = {}
         for ann in t["sample_annotation"].values():
             self._annotations.setdefault(ann.string("sample_token"), []).append(ann)
-        self._detections = _read_detections(Path(detections), t["sample"])
+        self._detections = read_detection_results(Path(detections), t["sample"])
         self._cameras: dict[str, Camera] = {}
         self._scenes, uncovered = self._select(condition, scene_names)
         self.uncovered_scenes = tuple(uncovered)
@@ -429,31 +447,44 @@ class NuScenesReader:
                              "no speed can be measured")
         return float(np.linalg.norm(Ti[:3, 3] - Tj[:3, 3]) / abs(ti - tj))
 
-    def _frame(self, scene: NuScenesScene, i: int) -> Frame:
+    def _record(self, scene: NuScenesScene, i: int) -> FrameRecord:
         token = scene.samples[i]
         sd = self._camera_data(token)
         camera = self._camera(sd)
         ego_to_global, _ = self._ego_pose(sd)
         global_to_ego = invert_pose(ego_to_global)
         stem = Path(sd.string("filename")).stem
-        if stem not in self.depth:
-            raise FileNotFoundError(
-                f"depth folder {self.depth.root} has no map {stem}.npy / {stem}.png for "
-                f"{sd.where} (sample {token!r} of scene {scene.name!r})")
-        depth = self.depth[stem]
+        depth_path = None
+        if self.depth is not None:
+            if stem not in self.depth:
+                raise FileNotFoundError(
+                    f"depth folder {self.depth.root} has no map {stem}.npy / {stem}.png for "
+                    f"{sd.where} (sample {token!r} of scene {scene.name!r})")
+            depth_path = self.depth.path(stem)
         gt, classes, ids, vis = self._ground_truth(scene, token, global_to_ego, camera)
         det = self._detections
         t0 = self._t["sample"][scene.samples[0]].integer("timestamp")
+        return FrameRecord(
+            scene=scene.name, key=stem, index=i,
+            timestamp=(self._t["sample"][token].integer("timestamp") - t0) * _US,
+            ego_speed=self._ego_speed(scene, i), camera=camera, gt_boxes3d=gt, gt_classes=classes,
+            gt_ids=ids, gt_visibility=vis, has_ground_truth=True,
+            det_boxes3d=transform_boxes(det.boxes[token], global_to_ego),
+            det_classes=det.classes[token], det_scores=det.scores[token],
+            depth_path=depth_path, png_scale=256.0 if self.depth is None else self.depth.png_scale,
+            image_path=self.dataroot / sd.string("filename"), token=token)
+
+    def _frame(self, scene: NuScenesScene, i: int) -> Frame:
+        if self.depth is None:
+            raise ValueError(f"NuScenesReader of {self.folder} has no depth folder: read frame records "
+                             "(scene.record(i)) and estimate their depth from the images instead")
+        record = self._record(scene, i)
+        depth = self.depth[record.key]
         try:
-            return Frame(
-                index=i, timestamp=(self._t["sample"][token].integer("timestamp") - t0) * _US,
-                ego_speed=self._ego_speed(scene, i), camera=camera, depth_est=depth,
-                depth_true=None, labels=None, gt_boxes3d=gt, gt_classes=classes, gt_ids=ids,
-                gt_visibility=vis, det_boxes3d=transform_boxes(det.boxes[token], global_to_ego),
-                det_classes=det.classes[token], det_scores=det.scores[token])
+            return record.to_frame(depth, str(record.depth_path))
         except ValueError as exc:
-            raise ValueError(f"scene {scene.name!r} sample {token!r} (depth "
-                             f"{self.depth.path(stem)}): {exc}") from exc
+            raise ValueError(f"scene {scene.name!r} sample {record.token!r} (depth "
+                             f"{record.depth_path}): {exc.__cause__}") from exc
 
     def _ground_truth(self, scene: NuScenesScene, sample: str, global_to_ego: np.ndarray,
                       camera: Camera) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

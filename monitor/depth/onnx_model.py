@@ -15,8 +15,10 @@ Input and output names and shapes are read from the model. The input must be one
 tensor ``(N, 3, H, W)`` (NCHW); dimensions the model fixes are used as they are, and
 dynamic ones are chosen from the image: the aspect ratio is kept, the short side becomes
 ``short_side`` and both sides are rounded to the nearest multiple of ``multiple_of``. The output may
-be ``(h, w)``, ``(1, h, w)`` or ``(1, 1, h, w)`` (Depth Anything V2 gives ``(B, H, W)``,
-ZoeDepth ``(B, 1, H, W)``); it is resized back to the image with bilinear interpolation.
+be ``(N, h, w)`` or ``(N, 1, h, w)`` for a batch of N, and ``(h, w)`` for one image (Depth
+Anything V2 gives ``(B, H, W)``, ZoeDepth ``(B, 1, H, W)``); it is resized back to the image
+with bilinear interpolation. :meth:`OnnxDepthEstimator.estimate_batch` runs images of one
+size as one batch (in runs of the batch size the model fixes, if it fixes one).
 Invalid output pixels become NaN before the resize, so an interpolated pixel that touches
 one is NaN as well: the mask grows by about a pixel and no invalid value leaks into a
 number.
@@ -223,30 +225,72 @@ class OnnxDepthEstimator:
         ndarray of shape (H, W), float32
             Metres; NaN where the model gives no valid depth.
         """
-        if (not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3
-                or image.shape[2] != 3):
-            raise ValueError(
-                f"image: {type(image).__name__} of shape {getattr(image, 'shape', None)} and dtype "
-                f"{getattr(image, 'dtype', None)}, expected a uint8 (H, W, 3) RGB image"
-            )
-        height, width = image.shape[:2]
-        in_h, in_w = self.input_size(height, width)
+        return self.estimate_batch([image])[0]
+
+    @property
+    def max_batch(self) -> int | None:
+        """The batch size the model fixes (ZoeDepth exports: 1), None when it is dynamic."""
+        n = self.input_shape[0]
+        return n if isinstance(n, int) and n > 0 else None
+
+    def estimate_batch(self, images: list[np.ndarray]) -> list[np.ndarray]:
+        """Depth of several images, run as batches of the same input size.
+
+        Images of one size go through the network together (in runs of :attr:`max_batch`
+        when the model fixes its batch size); the result is the same as one call per
+        image, in the order given.
+
+        Parameters
+        ----------
+        images : list of ndarray of shape (H, W, 3), uint8
+            RGB images (sizes may differ).
+
+        Returns
+        -------
+        list of ndarray of shape (H, W), float32
+            Metres per image; NaN where the model gives no valid depth.
+        """
+        for k, image in enumerate(images):
+            if (not isinstance(image, np.ndarray) or image.dtype != np.uint8 or image.ndim != 3
+                    or image.shape[2] != 3):
+                raise ValueError(
+                    f"image {k}: {type(image).__name__} of shape {getattr(image, 'shape', None)} and dtype "
+                    f"{getattr(image, 'dtype', None)}, expected a uint8 (H, W, 3) RGB image"
+                )
+        groups: dict[tuple[int, int], list[int]] = {}
+        for k, image in enumerate(images):
+            groups.setdefault(image.shape[:2], []).append(k)
+        out: list[np.ndarray | None] = [None] * len(images)
+        step = self.max_batch or max(1, len(images))
+        for (height, width), members in groups.items():
+            in_h, in_w = self.input_size(height, width)
+            for start in range(0, len(members), step):
+                batch = members[start:start + step]
+                x = np.stack([self._input(images[k], in_h, in_w) for k in batch])
+                (raw,) = self._session.run([self.output_name], {self.input_name: x})
+                for k, depth in zip(batch, self._split(np.asarray(raw), len(batch))):
+                    out[k] = cv2.resize(self._to_metres(depth), (width, height), interpolation=cv2.INTER_LINEAR)
+        return out
+
+    def _input(self, image: np.ndarray, in_h: int, in_w: int) -> np.ndarray:
+        """(3, in_h, in_w) network input of one RGB image."""
         resized = cv2.resize(image, (in_w, in_h), interpolation=self.preset.interpolation)
         x = resized.astype(np.float32) / np.float32(255.0)
         x = (x - np.asarray(self.preset.mean, np.float32)) / np.asarray(self.preset.std, np.float32)
-        x = np.ascontiguousarray(x.transpose(2, 0, 1)[None], dtype=self._input_dtype)
-        (out,) = self._session.run([self.output_name], {self.input_name: x})
-        raw = self._squeeze(np.asarray(out))
-        depth = self._to_metres(raw)
-        return cv2.resize(depth, (width, height), interpolation=cv2.INTER_LINEAR)
+        return np.ascontiguousarray(x.transpose(2, 0, 1), dtype=self._input_dtype)
 
-    def _squeeze(self, out: np.ndarray) -> np.ndarray:
-        if out.ndim < 2 or out.ndim > 4 or any(n != 1 for n in out.shape[:-2]) or min(out.shape[-2:]) < 1:
+    def _split(self, out: np.ndarray, n: int) -> list[np.ndarray]:
+        """The (h, w) maps of a batch of ``n``: output (n, h, w) or (n, 1, h, w); for n = 1 also (h, w)."""
+        if n == 1 and out.ndim == 2:
+            out = out[None]
+        if not (3 <= out.ndim <= 4 and out.shape[0] == n and (out.ndim == 3 or out.shape[1] == 1)
+                and min(out.shape[-2:]) >= 1):
             raise ValueError(
                 f"ONNX depth model {self.model_path}: output {self.output_name!r} has shape "
-                f"{out.shape}, expected (h, w), (1, h, w) or (1, 1, h, w)"
+                f"{out.shape} for a batch of {n}, expected ({n}, h, w) or ({n}, 1, h, w)"
+                + (" or (h, w)" if n == 1 else "")
             )
-        return out.reshape(out.shape[-2:]).astype(np.float32)
+        return [m.reshape(out.shape[-2:]).astype(np.float32) for m in out]
 
     def _to_metres(self, raw: np.ndarray) -> np.ndarray:
         invalid = ~np.isfinite(raw) | (raw <= 0)

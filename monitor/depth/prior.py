@@ -16,15 +16,20 @@ over 2 x 2 blocks, and only a block without any prior is invalid). Where validit
 that drops far returns) the mean over the valid samples is biased towards near values;
 :attr:`InverseDepthPrior.count` is kept so that callers can inspect the support.
 
-Memory is constant in the number of frames: two (H, W) arrays.
+Memory is constant in the number of frames: two (H, W) arrays. Accumulators of parts of the
+frames merge (:meth:`InverseDepthPrior.merge`): :func:`prior_of_files` builds a prior on
+several processes or on Ray.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable
 
 import numpy as np
 
+from monitor.depth.files import load_depth
+from monitor.offline.parallel import ordered_map
 from monitor.userfiles import read_npy, write_npy
 
 
@@ -76,6 +81,20 @@ class InverseDepthPrior:
         self.count += valid
         self.n_frames += 1
 
+    def merge(self, other: "InverseDepthPrior") -> None:
+        """Add the frames another accumulator has seen (the same size, or this one still empty)."""
+        if other.n_frames == 0:
+            return
+        if self.shape is None:
+            self.shape, self.count, self._sum = other.shape, other.count.copy(), other._sum.copy()
+        elif other.shape != self.shape:
+            raise ValueError(f"cannot merge a prior of {other.shape[1]}x{other.shape[0]} (W x H) into one of "
+                             f"{self.shape[1]}x{self.shape[0]}; every frame must have the same size")
+        else:
+            self._sum += other._sum
+            self.count += other.count
+        self.n_frames += other.n_frames
+
     def mean(self) -> np.ndarray:
         """The prior: float32 (H, W) mean inverse depth in 1/m, NaN where never valid."""
         if self.n_frames == 0:
@@ -102,6 +121,62 @@ def build_prior(depths: Iterable[tuple[str, np.ndarray]]) -> InverseDepthPrior:
     if prior.n_frames == 0:
         raise ValueError("no depth maps given; the prior needs at least one training frame")
     return prior
+
+
+#: depth files per part of :func:`prior_of_files` (the parts, not the workers, fix the order
+#: of the float64 sums: any number of workers gives the same prior, bit for bit)
+PRIOR_PART_FILES = 32
+
+
+@dataclass(frozen=True)
+class PriorPart:
+    """A picklable job for workers: ``build()`` returns a function that accumulates a list of
+    depth files (:func:`monitor.depth.files.load_depth`, PNGs at ``png_scale``) into an
+    :class:`InverseDepthPrior`."""
+
+    png_scale: float
+
+    def build(self):
+        def accumulate(paths: list) -> InverseDepthPrior:
+            return build_prior((str(path), training_depth(path, self.png_scale)) for path in paths)
+        return accumulate
+
+
+#: A training map whose median valid value is below this many metres is refused: as metres
+#: the whole view would be within reach of the camera, so it is an inverse depth in 1/m.
+MIN_MEDIAN_DEPTH_M = 1.0
+
+
+def training_depth(path: Path, png_scale: float) -> np.ndarray:
+    """The depth map in ``path``, refused (ValueError naming the file) when its median valid
+    value is below :data:`MIN_MEDIAN_DEPTH_M`: not metres but 1/m (a prior?)."""
+    depth = load_depth(path, png_scale=png_scale)
+    valid = depth[np.isfinite(depth) & (depth > 0)]
+    if valid.size and np.median(valid) < MIN_MEDIAN_DEPTH_M:
+        raise ValueError(
+            f"{path}: median valid value {float(np.median(valid)):.3g} is below "
+            f"{MIN_MEDIAN_DEPTH_M:g} m: not a depth map in metres but an inverse depth in 1/m "
+            "(a prior from an earlier run?); move it out of the depth folder"
+        )
+    return depth
+
+
+def prior_of_files(paths: list, png_scale: float, *, workers: int = 1, ray: str | None = None,
+                   progress=None) -> InverseDepthPrior:
+    """The prior of depth files, in parts of :data:`PRIOR_PART_FILES` on ``workers`` processes or Ray.
+
+    The parts are merged in order, so the result does not depend on ``workers`` or ``ray``.
+    ``progress(n)`` is called with the files of each part done.
+    """
+    parts = [list(paths[a:a + PRIOR_PART_FILES]) for a in range(0, len(paths), PRIOR_PART_FILES)]
+    total = InverseDepthPrior()
+    for part, partial in zip(parts, ordered_map(PriorPart(png_scale), parts, workers=workers, ray=ray)):
+        total.merge(partial)
+        if progress is not None:
+            progress(len(part))
+    if total.n_frames == 0:
+        raise ValueError("no depth maps given; the prior needs at least one training frame")
+    return total
 
 
 def save_prior(path: str | Path, prior: np.ndarray) -> None:

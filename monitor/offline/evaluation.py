@@ -18,7 +18,7 @@ on centre distance and a pair counts when IoU > alpha and |RDD| < beta.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -72,18 +72,6 @@ def observe(monitor: RiskMonitor, frame: Frame, scene: str, condition: str) -> O
             P = np.zeros((0, 5))
     return Observation(scene, condition, frame.index, frame.timestamp, report, G, P,
                        score(P, G, monitor.config.max_range))
-
-
-def observe_scenes(monitor: RiskMonitor, scenes: Iterable, progress=None) -> list[Observation]:
-    """Observations of every frame of every scene (scenes: objects with ``name``,
-    ``condition`` and iterable ``frames``); ``progress`` is called once per frame."""
-    out = []
-    for scene in scenes:
-        for frame in scene.frames:
-            out.append(observe(monitor, frame, scene.name, scene.condition))
-            if progress is not None:
-                progress()
-    return out
 
 
 def _pearson(a: np.ndarray, b: np.ndarray) -> float:

@@ -103,8 +103,11 @@ def save_frame_figure(image: np.ndarray, report, path: str | Path, title: str = 
 def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: float = 0.5) -> Path:
     """One panel per scene: risk (solid), target 1 - USC~ (dashed), shield threshold.
 
-    ``series``: dicts with ``name``, ``time`` (s), ``risk`` and ``target`` arrays and
-    ``status`` (list of str; invalid frames are marked with an x).
+    ``series``: dicts with ``name``, ``time`` (s), ``risk`` and ``target`` arrays (NaN
+    where there is none: a frame not processed, no ground truth) and ``status`` (list of
+    str; invalid frames are marked with an x). Drawn on a :class:`matplotlib.figure.Figure`
+    (no pyplot state, safe in worker processes) and written whole or not at all
+    (:func:`monitor.userfiles.save_figure`).
     """
     n = len(series)
     cols = min(3, n)
@@ -112,12 +115,15 @@ def save_risk_timeline(series: Sequence[dict], path: str | Path, threshold: floa
     fig = _figure(4.5 * cols, 2.6 * rows)
     axes = fig.subplots(rows, cols, squeeze=False, sharey=True)
     for ax, s in zip(axes.ravel(), series):
-        t = np.asarray(s["time"])
-        ax.plot(t, s["risk"], "-o", ms=3, label="risk")
-        ax.plot(t, s["target"], "--", color="grey", label="1 - USC~ (truth)")
-        invalid = np.array([st == "invalid-input" for st in s["status"]])
+        t = np.asarray(s["time"], dtype=np.float64)
+        risk = np.asarray(s["risk"], dtype=np.float64)
+        ax.plot(t, risk, "-o", ms=3, label="risk")
+        target = np.asarray(s["target"], dtype=np.float64)
+        if np.isfinite(target).any():
+            ax.plot(t, target, "--", color="grey", label="1 - USC~ (truth)")
+        invalid = np.array([st == "invalid-input" for st in s["status"]], dtype=bool)
         if invalid.any():
-            ax.plot(t[invalid], np.asarray(s["risk"])[invalid], "rx", label="invalid frame")
+            ax.plot(t[invalid], risk[invalid], "rx", label="invalid frame")
         ax.axhline(threshold, color="red", lw=0.8, ls=":")
         ax.set_title(s["name"], fontsize=9)
         ax.set_ylim(-0.02, 1.02)
