@@ -215,7 +215,6 @@ def _block_points_numpy(depth, stride, edge_spread, camera):
     height, width = depth.shape
     rows, cols = -(-height // stride), -(-width // stride)
     valid = np.isfinite(depth) & (depth > 0)
-    values = np.where(valid, depth, 0.0).astype(np.float64)
     out = np.zeros((4, rows, cols))
     invalid = np.zeros((rows, cols), dtype=np.int64)
     M = camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K)
