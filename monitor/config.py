@@ -1,13 +1,13 @@
 """The monitor's configuration: one YAML file, defaults shipped in the package.
 
 The configuration is a tree of frozen dataclasses that mirrors the YAML file: one class
-per section (``alignment``, ``detections``, ``retrieval``, ``visibility``, ``risk``,
-``shield``) and the scalars at the top (``max_range``). :func:`load_config` reads
-``monitor/default_config.yaml`` and overlays a user file that names only what it changes;
-the file's keys are read generically from the dataclasses' fields and types, so a new field
-is a new key with nothing else to keep in step. A section's field that has the name of a
-top-level field (``retrieval.max_range``) is not a key of its own: it takes the top-level
-value, so one range limit holds everywhere.
+per section (``alignment``, ``detections``, ``retrieval`` with one subsection per depth
+view, ``visibility``, ``risk``, ``shield``) and the scalars at the top (``max_range``).
+:func:`load_config` reads ``monitor/default_config.yaml`` and overlays a user file that
+names only what it changes; the file's keys are read generically from the dataclasses'
+fields and types, so a new field is a new key with nothing else to keep in step. A section's field that has the name of a
+top-level field (``retrieval.paper.max_range``) is not a key of its own: it takes the
+top-level value, so one range limit holds everywhere.
 
 Errors are :class:`ConfigError` naming the file and the key path
 (``risk.fail_safe = '1.0', must be a number``). Duplicate keys, unknown keys, wrong types,
@@ -26,6 +26,7 @@ from typing import Any
 import yaml
 
 from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds
+from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 from monitor.depth.visibility import VisibilityParams
 from monitor.geometry.boxes import DEFAULT_RANGE_M
@@ -104,6 +105,42 @@ class DetectionsConfig:
             raise ValueError(f"distance = {self.distance!r}, must be one of {', '.join(DISTANCES)}")
 
 
+#: the depth views ``retrieval.method`` can name
+RETRIEVAL_METHODS = ("paper", "geometric")
+
+
+@dataclass(frozen=True)
+class RetrievalConfig:
+    """The depth view: which one, and each one's parameters.
+
+    Attributes
+    ----------
+    method : str
+        One of :data:`RETRIEVAL_METHODS`: ``paper`` (the paper's retrieval,
+        :mod:`monitor.depth.retrieval`) or ``geometric`` (objects on the road in the
+        driving corridor, :mod:`monitor.depth.geometric`).
+    max_range : float
+        Metres; set from the top-level ``max_range`` (not a key), passed on to both views.
+    paper : RetrievalParams
+    geometric : GeometricParams
+    """
+
+    method: str = "paper"
+    max_range: float = DEFAULT_RANGE_M
+    paper: RetrievalParams = field(default_factory=RetrievalParams)
+    geometric: GeometricParams = field(default_factory=GeometricParams)
+
+    def __post_init__(self):
+        if self.method not in RETRIEVAL_METHODS:
+            raise ValueError(f"method = {self.method!r}, must be one of {', '.join(RETRIEVAL_METHODS)}")
+        for name, kind in (("paper", RetrievalParams), ("geometric", GeometricParams)):
+            value = getattr(self, name)
+            if not isinstance(value, kind):
+                raise ValueError(f"{name} is a {type(value).__name__}, expected a {kind.__name__}")
+            if value.max_range != self.max_range:
+                _set(self, name, replace(value, max_range=self.max_range))
+
+
 @dataclass(frozen=True)
 class RiskConfig:
     """Risks the monitor reports without the rule base.
@@ -176,11 +213,11 @@ class MonitorConfig:
     ----------
     alignment : AlignmentConfig
     max_range : float
-        Metres; S (and G in evaluation) beyond it are ignored. ``retrieval.max_range``
-        always equals it.
+        Metres; S (and G in evaluation) beyond it are ignored. ``retrieval.max_range`` (and
+        so both views' ``max_range``) always equals it.
     detections : DetectionsConfig
-    retrieval : RetrievalParams
-        The depth view's parameters (:mod:`monitor.depth.retrieval`).
+    retrieval : RetrievalConfig
+        The depth view and its parameters.
     visibility : VisibilityParams
         When a frame cannot be seen through (:mod:`monitor.depth.visibility`);
         ``visibility.max_range`` always equals ``max_range``.
@@ -191,7 +228,7 @@ class MonitorConfig:
     alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
     max_range: float = DEFAULT_RANGE_M
     detections: DetectionsConfig = field(default_factory=DetectionsConfig)
-    retrieval: RetrievalParams = field(default_factory=RetrievalParams)
+    retrieval: RetrievalConfig = field(default_factory=RetrievalConfig)
     visibility: VisibilityParams = field(default_factory=VisibilityParams)
     risk: RiskConfig = field(default_factory=RiskConfig)
     shield: ShieldConfig = field(default_factory=ShieldConfig)
@@ -313,7 +350,7 @@ def _section(cls, defaults: dict, user: dict, path: str, inherited: frozenset = 
         if not isinstance(sub, dict):
             raise ValueError(f"{path}{name} = {sub!r}, must be a mapping of keys")
         sub_cls = hints[name]
-        shared = frozenset(f.name for f in fields(sub_cls)) & frozenset(names)
+        shared = frozenset(f.name for f in fields(sub_cls)) & (frozenset(names) | inherited)
         kwargs[name] = _section(sub_cls, defaults.get(name, {}), sub, f"{path}{name}.", shared)
     try:
         return cls(**kwargs)

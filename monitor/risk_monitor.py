@@ -2,7 +2,9 @@
 
 Per frame (:meth:`RiskMonitor.step`):
 
-1. depth view: safety-critical objects S from the depth map (:mod:`monitor.depth.retrieval`);
+1. depth view: safety-critical objects S from the depth map, by the method the configuration
+   names (``retrieval.method``: the paper's :mod:`monitor.depth.retrieval` or the geometric
+   :mod:`monitor.depth.geometric`);
 2. detector view: the 3D detections projected into the image, P (:func:`monitor.geometry.camera.project_boxes`);
 3. alignment of S to P: IoU~ and RDD~ (:func:`monitor.alignment.align`);
 4. risk = FIS(IoU~, RDD~) (:mod:`fuzzcore`).
@@ -16,8 +18,9 @@ one of them raises instead of hiding in a report. A frame whose depth view finds
 range gives status ``no-objects`` and the configured ``risk.no_objects``, but only after a
 check that the view could see anything: a frame the depth view cannot see through (its
 lower image blocked by something near, no ground within range, or a region of invalid
-pixels large enough to hide an object: :mod:`monitor.depth.visibility`) gives status
-``no-view`` and ``risk.no_view`` (1.0 by default), whatever the view found. A frame whose
+pixels large enough to hide an object: :mod:`monitor.depth.visibility`; or, with the
+geometric view, what it calls blind: :class:`~monitor.depth.geometric.BlindViewError`) gives
+status ``no-view`` and ``risk.no_view`` (1.0 by default), whatever the view found. A frame whose
 features no rule of the rule base covers gives status ``no-rule-fired`` and
 ``risk.no_rule_fired`` (1.0 by default) instead of the rule base's fallback output (MATLAB's
 midpoint 0.5, which is exactly the shield's threshold).
@@ -38,7 +41,8 @@ import fuzzcore
 from monitor import alignment as alignment_stage
 from monitor.alignment import Alignment, align
 from monitor.config import MonitorConfig
-from monitor.depth import retrieval, visibility
+from monitor.depth import geometric, retrieval, visibility
+from monitor.depth.geometric import BlindViewError, GeometricRetriever
 from monitor.depth.prior import check_prior
 from monitor.depth.retrieval import InvalidDepthError, Retriever, as_depth_map
 from monitor.depth.visibility import check_view
@@ -131,7 +135,8 @@ class RiskMonitor:
         a frame no rule covers is reported as ``no-rule-fired`` (with
         ``config.risk.no_rule_fired``) and never as the rule base's fallback value.
     prior : ndarray of shape (H, W)
-        Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`).
+        Mean inverse depth of training frames, 1/m (:mod:`monitor.depth.prior`); the
+        paper's view uses it, the geometric one does not (it is still checked).
     camera : Camera
         The camera the depth maps and projections refer to; its size must match ``prior``.
     config : MonitorConfig, optional
@@ -165,7 +170,12 @@ class RiskMonitor:
         self.camera = camera
         self.config = config if config is not None else MonitorConfig()
         self.explain = explain
-        self._retriever = Retriever(prior, self.config.retrieval)
+        self._prior = prior
+        chosen = self.config.retrieval
+        if chosen.method == "geometric":
+            self._retriever = GeometricRetriever(camera, chosen.geometric)
+        else:
+            self._retriever = Retriever(prior, chosen.paper)
         self._iou_first = fis.input_names[0] == "iou"
         if warmup:
             self.warmup()
@@ -179,7 +189,7 @@ class RiskMonitor:
         The frame: the road as the prior expects it (no foreground) with a near box at the
         image centre, and one detection where that box is.
         """
-        retrieval.warmup()
+        (geometric if self.config.retrieval.method == "geometric" else retrieval).warmup()
         visibility.warmup()
         alignment_stage.warmup()
         self._rules.warmup()
@@ -190,7 +200,7 @@ class RiskMonitor:
 
     def _synthetic_frame(self) -> tuple[np.ndarray, np.ndarray]:
         height, width = self.camera.height, self.camera.width
-        prior = self._retriever.prior
+        prior = self._prior
         with np.errstate(divide="ignore"):
             depth = np.where(prior > 0, 1.0 / prior, 1e3).astype(np.float32)  # NaN prior stays NaN
         near = min(5.0, 0.5 * self.config.max_range)
@@ -198,6 +208,14 @@ class RiskMonitor:
         # a 1 m cube on the optical axis at the same distance, in the ego frame
         centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
         return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
+
+    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, str]:
+        """S, and why the view cannot see through the frame ("" when it can)."""
+        try:
+            S = self._retriever(depth)
+        except BlindViewError as exc:
+            return np.zeros((0, 5)), str(exc)
+        return S, check_view(depth, self.config.visibility)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -270,19 +288,19 @@ class RiskMonitor:
         -------
         RiskReport
             Status ``invalid-input`` (with the reason and the fail-safe risk) for a frame
-            that fails these rules or whose depth map is more than
-            ``config.retrieval.max_invalid_fraction`` invalid; ``no-view`` for a frame
-            the depth view cannot see through (``config.visibility``), ``no-objects`` when
-            it sees nothing in range, ``no-rule-fired`` when no rule covers the features.
+            that fails these rules or whose depth map is more invalid than the depth view's
+            ``max_invalid_fraction`` allows; ``no-view`` for a frame the depth view cannot see
+            through (``config.visibility``, or the geometric view's own
+            :class:`~monitor.depth.geometric.BlindViewError`), ``no-objects`` when it sees
+            nothing in range, ``no-rule-fired`` when no rule covers the features.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
-            S = self._retriever(depth)
+            S, blind = self._depth_view(depth)
         except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
-        blind = check_view(depth, self.config.visibility)
         t1 = time.perf_counter()
         timings["retrieval"] = t1 - t0
         P = self._project(boxes)

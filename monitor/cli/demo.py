@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
                                                         config.shield.threshold)}
     nominal = riskiest.get("nominal") or next(iter(riskiest.values()))
     save_retrieval_figure(out / "retrieval_stages.png", nominal[0].depth_est, prior, shade(nominal[0]),
-                          config.retrieval)
+                          config.retrieval.paper)
     figures["retrieval_stages.png"] = out / "retrieval_stages.png"
     for condition, (frame, report, scene_name) in riskiest.items():
         name = f"frame_{condition.replace(' ', '_')}.png"

@@ -4,5 +4,6 @@
   the range limit;
 - :mod:`~monitor.geometry.poses`: quaternions, rigid transforms;
 - :mod:`~monitor.geometry.boxes3d`: 3D box arrays ``(n, 7)``, frame changes, corners;
-- :mod:`~monitor.geometry.camera`: the pinhole camera and :func:`project_boxes`.
+- :mod:`~monitor.geometry.camera`: the pinhole camera and :func:`project_boxes`;
+- :mod:`~monitor.geometry.corridor`: the driving corridor along the ego's path.
 """

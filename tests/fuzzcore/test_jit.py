@@ -19,7 +19,8 @@ def test_kernel_modules_found():
     assert KERNEL_MODULES == [
         "fuzzcore._kernels", "fuzzcore.tune._objective_kernels", "fuzzcore.verification._kernels",
         "monitor._alignment_kernels",
-        "monitor.depth._retrieval_kernels", "monitor.depth._visibility_kernels",
+        "monitor.depth._geometric_kernels", "monitor.depth._retrieval_kernels",
+        "monitor.depth._visibility_kernels",
         "monitor.geometry._box_kernels",
         "monitor.geometry._camera_kernels", "monitor.synthetic._degrade_kernels",
         "monitor.synthetic._raycast_kernels",

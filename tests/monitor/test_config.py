@@ -7,7 +7,9 @@ import yaml
 
 from monitor.alignment import check_thresholds
 from monitor.config import (DEFAULT_CONFIG_PATH, MAX_NESTING, AlignmentConfig, ConfigError,
-                            DetectionsConfig, MonitorConfig, RiskConfig, ShieldConfig, load_config)
+                            DetectionsConfig, MonitorConfig, RetrievalConfig, RiskConfig, ShieldConfig,
+                            load_config)
+from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 
 
@@ -22,32 +24,45 @@ def test_shipped_defaults_equal_the_code_defaults():
     assert load_config() == MonitorConfig()
 
 
-def test_the_sections_mirror_the_shipped_file():
-    shipped = yaml.safe_load(DEFAULT_CONFIG_PATH.read_text(encoding="utf-8"))
-    config = MonitorConfig()
-    for f in fields(config):
-        value = getattr(config, f.name)
-        assert f.name in shipped
-        if is_dataclass(value):  # every field is a key, except the inherited max_range
-            assert set(shipped[f.name]) == {g.name for g in fields(value)} - {"max_range"}
-            for g in fields(value):
-                if g.name != "max_range":
-                    assert shipped[f.name][g.name] == getattr(value, g.name)
+def _mirrors(shipped: dict, section) -> None:
+    """Every field of ``section`` is a key of ``shipped`` with its value (sections within
+    sections alike), except the inherited max_range below the top."""
+    names = {g.name for g in fields(section)}
+    if not isinstance(section, MonitorConfig):
+        names -= {"max_range"}
+    assert set(shipped) == names
+    for name in names:
+        value = getattr(section, name)
+        if is_dataclass(value):
+            _mirrors(shipped[name], value)
         else:
-            assert shipped[f.name] == value
+            assert shipped[name] == value, name
+
+
+def test_the_sections_mirror_the_shipped_file():
+    _mirrors(yaml.safe_load(DEFAULT_CONFIG_PATH.read_text(encoding="utf-8")), MonitorConfig())
 
 
 def test_user_file_overrides_only_what_it_names(tmp_path):
     config = load_config(_write(tmp_path, "alignment: {alpha: 0.5}\nshield: {threshold: 0.6, release: 0.4}\n"
                                           "max_range: 30\nrisk:\n  fail_safe: 0.9\n"
-                                          "retrieval: {depth_percentile: 5}\n"))
+                                          "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
     assert config.alignment == AlignmentConfig(alpha=0.5, beta=0.2)
     assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=0, deceleration=3.0)
     assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.0)
     assert config.detections == DetectionsConfig()
     assert config.max_range == 30.0 and isinstance(config.max_range, float)
-    assert config.retrieval.max_range == 30.0  # one range limit, everywhere
-    assert config.retrieval.depth_percentile == 5.0 and config.retrieval.canny_low == 40.0
+    # one range limit, everywhere
+    assert config.retrieval.paper.max_range == config.retrieval.geometric.max_range == 30.0
+    assert config.retrieval.paper.depth_percentile == 5.0 and config.retrieval.paper.canny_low == 40.0
+    assert config.retrieval.method == "paper"
+    assert config.retrieval.geometric == GeometricParams(stride=2, max_range=30.0)
+
+
+def test_the_shipped_file_holds_every_default_of_both_depth_views():
+    defaults = load_config().retrieval
+    assert defaults.paper == RetrievalParams() and defaults.geometric == GeometricParams()
+    assert load_config().retrieval == RetrievalConfig()
 
 
 def test_an_empty_file_is_the_defaults(tmp_path):
@@ -58,6 +73,10 @@ def test_an_empty_file_is_the_defaults(tmp_path):
     ("alignment: {gamma: 1}\n", r"unknown key alignment\.gamma; expected one of alignment\.alpha, alignment\.beta"),
     ("colour: red\n", "unknown key colour"),
     ("retrieval: {max_range: 5}\n", r"unknown key retrieval\.max_range"),  # the top-level one rules
+    ("retrieval: {paper: {max_range: 5}}\n", r"unknown key retrieval\.paper\.max_range"),
+    ("retrieval: {method: stereo}\n", r"retrieval\.method = 'stereo', must be one of paper, geometric"),
+    ("retrieval: {geometric: {stride: 0}}\n", r"retrieval\.geometric\.stride = 0, must be an integer >= 1"),
+    ("retrieval: {downsample: 2}\n", r"unknown key retrieval\.downsample; expected one of retrieval\.method"),
     ("alignment: {alpha: 2}\n", r"alignment\.alpha = 2\.0, expected an IoU threshold in \[0, 1\]"),
     ("alignment: {beta: 0}\n", r"alignment\.beta = 0\.0"),
     ("shield: {threshold: 0.3, release: 0.4}\n", r"shield\.release = 0\.4 must be <= threshold = 0\.3"),
@@ -72,9 +91,9 @@ def test_an_empty_file_is_the_defaults(tmp_path):
     ("detections: {distance: nearest}\n", r"detections\.distance = 'nearest', must be one of camera_depth, ego_closest"),
     ("detections: {distance: 3}\n", r"detections\.distance = 3, must be text"),
     ("detections: {min_score: .nan}\n", r"detections\.min_score = nan, must be in \[0, 1\]"),
-    ("retrieval: {downsample: 3}\n", r"retrieval\.downsample = 3, must be one of"),
-    ("retrieval: {blur_size: 5.0}\n", r"retrieval\.blur_size = 5\.0, must be an integer"),
-    ("retrieval: {full_scale: x}\n", r"retrieval\.full_scale = 'x', must be a number"),
+    ("retrieval: {paper: {downsample: 3}}\n", r"retrieval\.paper\.downsample = 3, must be one of"),
+    ("retrieval: {paper: {blur_size: 5.0}}\n", r"retrieval\.paper\.blur_size = 5\.0, must be an integer"),
+    ("retrieval: {paper: {full_scale: x}}\n", r"retrieval\.paper\.full_scale = 'x', must be a number"),
     ("shield: 0.5\n", r"shield = 0\.5, must be a mapping"),
     ("shield:\n", r"shield = None, must be a mapping"),
     ("- alignment\n", "expected a mapping of sections, got list"),
@@ -123,10 +142,13 @@ def test_alignment_limits_have_one_owner():
 def test_sections_are_frozen_and_checked_when_built_in_code():
     with pytest.raises(FrozenInstanceError):
         MonitorConfig().max_range = 3.0
-    with pytest.raises(ValueError, match="retrieval is a dict, expected a RetrievalParams"):
+    with pytest.raises(ValueError, match="retrieval is a dict, expected a RetrievalConfig"):
         MonitorConfig(retrieval={"downsample": 1})
-    config = MonitorConfig(max_range=35, retrieval=RetrievalParams(downsample=1))
-    assert config.retrieval == RetrievalParams(downsample=1, max_range=35.0)
+    with pytest.raises(ValueError, match="paper is a dict, expected a RetrievalParams"):
+        RetrievalConfig(paper={"downsample": 1})
+    config = MonitorConfig(max_range=35, retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1)))
+    assert config.retrieval.paper == RetrievalParams(downsample=1, max_range=35.0)
+    assert config.retrieval.geometric == GeometricParams(max_range=35.0)
     assert ShieldConfig(hold_frames=np.int64(3)).hold_frames == 3  # numpy integers are integers
     assert type(ShieldConfig(hold_frames=np.int64(3)).hold_frames) is int
     with pytest.raises(ValueError, match="threshold = '0.5', must be a number"):

@@ -16,8 +16,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from monitor.config import MonitorConfig, RiskConfig
-from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, STATUSES, InvalidFrameError, RiskMonitor
+from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig
+from monitor.risk_monitor import (INVALID_INPUT, NO_OBJECTS, NO_VIEW, OK, STATUSES, InvalidFrameError,
+                                   RiskMonitor)
 from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
@@ -185,8 +186,9 @@ _SMALL = Camera(CAMERA.K * np.array([[0.1], [0.1], [1.0]]), 160, 90, CAMERA.cam_
 def small_monitor(fis):
     depth = render_depth(_SMALL, np.zeros((0, 7))).depth
     prior = (1.0 / np.where(np.isfinite(depth), depth, FAR_M)).astype(np.float32)
+    retrieval = MonitorConfig().retrieval
     return RiskMonitor(fis, prior, _SMALL, replace(MonitorConfig(), retrieval=replace(
-        MonitorConfig().retrieval, min_size=4.0)))
+        retrieval, paper=replace(retrieval.paper, min_size=4.0))))
 
 
 _floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
@@ -241,7 +243,9 @@ _FIRST_FRAME = textwrap.dedent("""
     import numpy as np
     import fuzzcore
     from fuzzcore import _kernels
-    from monitor.depth import _retrieval_kernels
+    from dataclasses import replace
+    from monitor.config import MonitorConfig, RetrievalConfig
+    from monitor.depth import _geometric_kernels, _retrieval_kernels
     from monitor.geometry import _box_kernels, _camera_kernels
     from monitor.geometry.camera import Camera
     from monitor.risk_monitor import RiskMonitor
@@ -254,10 +258,12 @@ _FIRST_FRAME = textwrap.dedent("""
     person = np.array([[9.0, 0.8, 0.9, 0.7, 0.7, 1.8, 0.0]])
     depth = render_depth(camera, person).depth
     depth = np.where(np.isfinite(depth), depth, 80.0).astype(np.float32)
-    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, camera, warmup=sys.argv[1] == "warm")
+    config = replace(MonitorConfig(), retrieval=RetrievalConfig(method=sys.argv[2]))
+    monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, camera, config,
+                          warmup=sys.argv[1] == "warm")
 
     def signatures():
-        modules = (_kernels, _retrieval_kernels, _box_kernels, _camera_kernels)
+        modules = (_kernels, _retrieval_kernels, _geometric_kernels, _box_kernels, _camera_kernels)
         return {f"{m.__name__}.{n}": len(d.signatures) for m in modules for n, d in vars(m).items()
                 if hasattr(d, "signatures")}
 
@@ -269,17 +275,19 @@ _FIRST_FRAME = textwrap.dedent("""
 """)
 
 
-@pytest.mark.parametrize("mode", ["warm", "cold"])
-def test_the_first_step_after_construction_compiles_nothing(mode):
+@pytest.mark.parametrize("mode, method", [("warm", "paper"), ("cold", "paper"), ("warm", "geometric"),
+                                          ("cold", "geometric")])
+def test_the_first_step_after_construction_compiles_nothing(mode, method):
     # a fresh process: kernels other tests compiled in this one would hide a missing warm-up
-    out = subprocess.run([sys.executable, "-c", _FIRST_FRAME, mode], capture_output=True, text=True,
-                         check=True).stdout
+    out = subprocess.run([sys.executable, "-c", _FIRST_FRAME, mode, method], capture_output=True,
+                         text=True, check=True).stdout
     result = json.loads(out.strip().splitlines()[-1])
     assert result["status"] == [OK, OK]  # every stage ran: retrieval, projection, alignment, rules
     if mode == "warm":
         assert result["compiled"] == []
     else:  # without warmup the same frames compile (or load) kernels inside step: the test can fail
-        assert any("_retrieval_kernels" in k for k in result["compiled"])
+        kernels = {"paper": "_retrieval_kernels", "geometric": "_geometric_kernels"}[method]
+        assert any(kernels in k for k in result["compiled"])
         assert any("_box_kernels" in k for k in result["compiled"])
 
 
@@ -313,3 +321,43 @@ def test_monitor_refuses_a_rule_base_without_iou_and_rdd(prior):
         (fuzzcore.Rule((1,), (1,)),))
     with pytest.raises(ValueError, match="inputs iou and rdd"):
         RiskMonitor(other, prior, CAMERA)
+
+
+# --------------------------------------------------------------------------- the geometric view
+
+@pytest.fixture(scope="module")
+def geometric_monitor(fis, prior):
+    config = replace(MonitorConfig(), retrieval=RetrievalConfig(method="geometric"))
+    return RiskMonitor(fis, prior, CAMERA, config)
+
+
+def test_the_geometric_view_sees_the_pedestrian_where_the_detector_does(geometric_monitor, fis,
+                                                                         scene_depth):
+    report = geometric_monitor.step(scene_depth, PEDESTRIAN)
+    assert report.status == OK and len(report.S) == 1 and len(report.P) == 1
+    # the pedestrian's front face is 9 - 0.35 - 1.70 = 6.95 m from the camera in both views;
+    # S lacks the bottom 0.2 m of the 1.8 m (the height band): IoU about 1.6 / 1.8
+    assert report.S[0, 4] == pytest.approx(report.P[0, 4], rel=1e-3)
+    assert report.iou > 0.8 and abs(report.rdd) < 0.01
+    assert report.risk == pytest.approx(fis.infer(iou=report.iou, rdd=report.rdd), abs=0)
+    missed = geometric_monitor.step(scene_depth, np.zeros((0, 7)))
+    assert missed.status == OK and missed.iou == 0.0 and missed.rdd == 1.0
+
+
+def test_the_geometric_view_ignores_a_wall_beside_the_road(geometric_monitor, monitor):
+    wall = np.array([[15.0, 6.0, 2.0, 0.4, 30.0, 4.0, 0.0]])
+    report = geometric_monitor.step(_depth(wall), np.zeros((0, 7)))
+    assert report.status == NO_OBJECTS
+    assert monitor.step(_depth(wall), np.zeros((0, 7))).status == OK  # the paper's view: an object
+
+
+def test_a_frame_the_geometric_view_calls_blind_has_no_view(geometric_monitor, scene_depth):
+    pitched = geometric_monitor.camera.cam_to_ego.copy()
+    a = np.radians(-8.0)  # the camera pitched up by 8 degrees: the road reads under z = 0
+    pitched[:3, :3] = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]]) \
+        @ pitched[:3, :3]
+    depth = render_depth(Camera(CAMERA.K, CAMERA.width, CAMERA.height, pitched), PEDESTRIAN).depth
+    depth = np.where(np.isfinite(depth), depth, FAR_M).astype(np.float32)
+    report = geometric_monitor.step(depth, PEDESTRIAN)
+    assert report.status == NO_VIEW and report.risk == geometric_monitor.config.risk.no_view
+    assert "under the road plane" in report.reason and len(report.P) == 1 and len(report.S) == 0

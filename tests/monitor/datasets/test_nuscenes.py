@@ -16,7 +16,7 @@ import pytest
 import fuzzcore
 from monitor.geometry.camera import Camera, project_boxes
 from monitor.cli import main
-from monitor.config import MonitorConfig
+from monitor.config import MonitorConfig, RetrievalConfig
 from monitor.depth.files import DepthFolder
 from monitor.datasets.nuscenes import NuScenesReader, category_to_detection_name
 from monitor.depth.prior import save_prior
@@ -223,7 +223,7 @@ def test_the_monitor_runs_on_a_frame(reader):
     prior = np.full((H, W), 1.0 / FAR_M, np.float32)
     # a 160 x 90 image: full resolution and small boxes (the defaults suit 1600 x 900)
     # the painted frame has no road: the view check (which would call it "no ground") is off
-    config = MonitorConfig(retrieval=RetrievalParams(downsample=1, min_size=4.0),
+    config = MonitorConfig(retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1, min_size=4.0)),
                            visibility=VisibilityParams(min_in_range_share=0.0, min_ground_ratio=0.0))
     monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, f0.camera, config)
     report = monitor.step(depth, f0.det_boxes3d, f0.det_scores)
@@ -370,7 +370,8 @@ def test_features_command_runs_on_nuscenes(tmp_path, capsys):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     np.save(kwargs["depth"] / "n000__CAM_FRONT__0.npy", depth)
     save_prior(tmp_path / "prior.npy", np.full((H, W), 1.0 / FAR_M, np.float32))
-    (tmp_path / "config.yaml").write_text("retrieval:\n  downsample: 1\n  min_size: 4.0\n"  # no road: view check off
+    (tmp_path / "config.yaml").write_text("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
+                                          # no road: view check off
                                           "visibility:\n  min_in_range_share: 0.0\n  min_ground_ratio: 0.0\n")
     out = tmp_path / "f.csv"
     argv = ["features", "-o", str(out), "--split", "all", "--config", str(tmp_path / "config.yaml"),

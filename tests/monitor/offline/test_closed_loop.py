@@ -45,7 +45,9 @@ def monitor(camera):
                         for f in generate_frames("nominal", s, n_frames=10, camera=camera)).mean()
     config = load_config()
     # half the image: the depth view's smallest box is half as many pixels
-    config = replace(config, retrieval=replace(config.retrieval, min_size=config.retrieval.min_size / 2))
+    paper = config.retrieval.paper
+    config = replace(config, retrieval=replace(config.retrieval,
+                                               paper=replace(paper, min_size=paper.min_size / 2)))
     return RiskMonitor(fuzzcore.load(shipped_rules()), prior, camera, config, explain=False)
 
 

@@ -1,0 +1,373 @@
+"""Numba kernels of the geometric depth view (private; see :mod:`monitor.depth.geometric`).
+
+The kernels trust their inputs (the public class validates them: C-contiguous arrays of the
+stated dtypes and shapes) and never raise. A depth is valid when it is finite and > 0; a
+block whose depth reads 0 has no valid pixel. The per-block arrays are (rows, cols) grids of
+``stride x stride`` pixel blocks, or their flat (rows * cols,) views. Compiled with
+:mod:`fuzzcore.jit`'s options: a division follows IEEE rules instead of testing for zero, and
+no fastmath, so NaN and inf keep their meaning.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from fuzzcore.jit import kernel
+
+_INF = np.float32(np.inf)
+
+
+@kernel
+def block_points(depth, stride, edge_spread, M, origin, xs, ys, zs, ds, invalid_px):
+    """One depth per block, back-projected through the block's centre.
+
+    A block's depth is the mean of its valid depths, or, at an edge (the largest exceeds
+    the smallest by more than ``edge_spread`` times the smallest), its smallest: the nearer
+    surface, never a point floating between two. ``depth`` is float32 (H, W) metres;
+    ``M`` float64 (3, 3) maps a pixel ``(u, v, 1)`` to its ego-frame ray scaled to camera
+    z = 1 (``R K^-1``); ``origin`` float64 (3,) is the camera centre in the ego frame. The
+    blocks cover rows ``r stride .. (r + 1) stride - 1`` and columns likewise (partial at
+    the last row and column); the centre of a block spanning pixels ``[j0, j1) x [i0, i1)``
+    is ``((j0 + j1) / 2, (i0 + i1) / 2)``. Outputs, float32 (rows, cols): ``xs, ys, zs``
+    the ego-frame point (metres) and ``ds`` the camera depth; a block without a valid pixel
+    gets 0 in all four. ``invalid_px`` int32 (rows, cols): the block's invalid pixels.
+    Returns the number of invalid pixels.
+    """
+    height, width = depth.shape
+    rows, cols = ds.shape
+    zero = np.float32(0.0)
+    sums = np.empty(width, dtype=np.float32)
+    counts = np.empty(width, dtype=np.int32)
+    lows = np.empty(width, dtype=np.float32)
+    highs = np.empty(width, dtype=np.float32)
+    spread = np.float32(1.0 + edge_spread)
+    n_invalid = 0
+    for r in range(rows):
+        i0 = r * stride
+        i1 = min(i0 + stride, height)
+        sums[:] = zero
+        counts[:] = 0
+        lows[:] = _INF
+        highs[:] = zero
+        for i in range(i0, i1):
+            row = depth[i]
+            for j in range(width):
+                d = row[j]
+                valid = (d > zero) & (d < _INF)
+                sums[j] += d if valid else zero
+                counts[j] += np.int32(valid)
+                lows[j] = min(lows[j], d if valid else _INF)
+                highs[j] = max(highs[j], d if valid else zero)
+        v = 0.5 * (i0 + i1)
+        for c in range(cols):
+            j0 = c * stride
+            j1 = min(j0 + stride, width)
+            total = zero
+            n = 0
+            low = _INF
+            high = zero
+            for j in range(j0, j1):
+                total += sums[j]
+                n += counts[j]
+                low = min(low, lows[j])
+                high = max(high, highs[j])
+            missing = (i1 - i0) * (j1 - j0) - n
+            invalid_px[r, c] = missing
+            n_invalid += missing
+            if n == 0:
+                xs[r, c] = zero
+                ys[r, c] = zero
+                zs[r, c] = zero
+                ds[r, c] = zero
+                continue
+            d = total / np.float32(n) if high <= spread * low else low
+            u = 0.5 * (j0 + j1)
+            xs[r, c] = origin[0] + d * (M[0, 0] * u + M[0, 1] * v + M[0, 2])
+            ys[r, c] = origin[1] + d * (M[1, 0] * u + M[1, 1] * v + M[1, 2])
+            zs[r, c] = origin[2] + d * (M[2, 0] * u + M[2, 1] * v + M[2, 2])
+            ds[r, c] = d
+    return n_invalid
+
+
+@kernel(inline=True)
+def _lateral(x, y, centre_y, tan_heading, step):
+    """Lateral offset of ``(x, y)`` from the corridor's centreline (its tangent line at the
+    middle of the point's table row, see :meth:`monitor.geometry.corridor.Corridor.table`),
+    NaN outside its reach."""
+    if not x >= 0.0:
+        return np.nan
+    k = int(x / step)
+    if k >= centre_y.shape[0]:
+        return np.nan
+    t = tan_heading[k]
+    return abs(y - centre_y[k] - t * (x - (k + 0.5) * step)) / math.sqrt(1.0 + t * t)
+
+
+@kernel
+def footprint_blocks(ground_x, ground_y, ground_d, max_range, centre_y, tan_heading, step,
+                     half_width, out):
+    """The blocks that look at the corridor's ground.
+
+    ``ground_x, ground_y, ground_d`` (flat float64) are where each block's centre ray meets
+    the nominal ground plane (ego x, y, camera depth; ``ground_d`` inf where it does not).
+    A block looks at the corridor when ``ground_d <= max_range`` and the lateral offset of
+    its ground point is at most ``half_width``. Their flat indices are written to the start
+    of ``out`` (int64); returns how many.
+    """
+    n = 0
+    for k in range(ground_d.shape[0]):
+        if ground_d[k] <= max_range and \
+                _lateral(ground_x[k], ground_y[k], centre_y, tan_heading, step) <= half_width:
+            out[n] = k
+            n += 1
+    return n
+
+
+@kernel
+def ground_candidates(xs, ys, zs, ds, x_max, band0, band_slope, out):
+    """Flat indices of the blocks that may be road: valid, ``0 <= x <= x_max`` and
+    ``|z| <= band0 + band_slope * sqrt(x^2 + y^2)`` (the nominal plane's band that every
+    plane within the sanity bounds stays in). Written to the start of ``out`` (int64);
+    returns how many."""
+    n = 0
+    for k in range(ds.shape[0]):
+        x, y, z = xs[k], ys[k], zs[k]
+        if ds[k] > 0.0 and x >= 0.0 and x <= x_max and \
+                abs(z) <= band0 + band_slope * math.sqrt(x * x + y * y):
+            out[n] = k
+            n += 1
+    return n
+
+
+@kernel
+def ransac_plane(xs, ys, zs, idx, n, uniforms, n_score, tol, max_slope, max_offset):
+    """The plane ``z = a x + b y + c`` through three candidates with the most inliers
+    (float64 arithmetic on the float32 points).
+
+    Hypothesis i goes through candidates ``idx[floor(uniforms[i, m] * n)]``, m = 0, 1, 2
+    (``uniforms`` float64 (iterations, 3) in [0, 1)). Planes with ``a^2 + b^2 >
+    max_slope^2`` or ``|c| > max_offset`` are skipped, as are degenerate triples. A
+    hypothesis scores the candidates ``idx[0], idx[s], idx[2 s], ...`` (``s = max(1, n //
+    n_score)``) within ``tol`` of it vertically; ties keep the earlier hypothesis. Returns
+    ``(a, b, c, score)``; score 0 and a zero plane when no hypothesis passed.
+    """
+    best_a, best_b, best_c, best = 0.0, 0.0, 0.0, 0
+    if n < 3:
+        return best_a, best_b, best_c, best
+    s = max(1, n // n_score)
+    for it in range(uniforms.shape[0]):
+        i = idx[min(int(uniforms[it, 0] * n), n - 1)]
+        j = idx[min(int(uniforms[it, 1] * n), n - 1)]
+        k = idx[min(int(uniforms[it, 2] * n), n - 1)]
+        xi, yi, zi = float(xs[i]), float(ys[i]), float(zs[i])
+        ux, uy, uz = xs[j] - xi, ys[j] - yi, zs[j] - zi
+        vx, vy, vz = xs[k] - xi, ys[k] - yi, zs[k] - zi
+        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+        if not abs(nz) > 1e-6 * norm:  # degenerate triple or a vertical plane
+            continue
+        a, b = -nx / nz, -ny / nz
+        c = zi - a * xi - b * yi
+        if a * a + b * b > max_slope * max_slope or abs(c) > max_offset:
+            continue
+        score = 0
+        for m in range(0, n, s):
+            q = idx[m]
+            score += abs(zs[q] - (a * xs[q] + b * ys[q] + c)) <= tol
+        if score > best:
+            best_a, best_b, best_c, best = a, b, c, score
+    return best_a, best_b, best_c, best
+
+
+@kernel
+def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
+    """Least-squares ``z = a x + b y + c`` over the candidates within ``tol`` of the plane
+    given. Returns ``(a, b, c, inliers)``: the refit (the plane given if the inliers do not
+    determine one) and how many candidates were within ``tol`` of the plane given."""
+    sxx = sxy = sx = syy = sy = sxz = syz = sz = 0.0
+    count = 0
+    for m in range(n):
+        q = idx[m]
+        x, y, z = float(xs[q]), float(ys[q]), float(zs[q])
+        if abs(z - (a * x + b * y + c)) <= tol:
+            sxx += x * x
+            sxy += x * y
+            sx += x
+            syy += y * y
+            sy += y
+            sxz += x * z
+            syz += y * z
+            sz += z
+            count += 1
+    w = float(count)
+    # normal equations [[sxx sxy sx] [sxy syy sy] [sx sy w]] p = [sxz syz sz], Cramer's rule
+    det = sxx * (syy * w - sy * sy) - sxy * (sxy * w - sy * sx) + sx * (sxy * sy - syy * sx)
+    scale = (sxx + syy + w) ** 3
+    if count < 3 or not abs(det) > 1e-12 * scale:
+        return a, b, c, count
+    da = sxz * (syy * w - sy * sy) - sxy * (syz * w - sy * sz) + sx * (syz * sy - syy * sz)
+    db = sxx * (syz * w - sz * sy) - sxz * (sxy * w - sy * sx) + sx * (sxy * sz - syz * sx)
+    dc = sxx * (syy * sz - sy * syz) - sxy * (sxy * sz - sy * sxz) + sx * (sxy * syz - syy * sxz)
+    return da / det, db / det, dc / det, count
+
+
+@kernel
+def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
+             centre_y, tan_heading, step, half_width, obstacle, corridor):
+    """Which blocks stand above the road, and which of those are inside the corridor.
+
+    A valid block's height above the plane is ``h = z - (a x + b y + c)``. ``obstacle``
+    (flat uint8) gets 1 where ``min_height <= h <= max_height`` and ``d <= max_range``;
+    ``corridor`` gets 1 where a block is an obstacle and its lateral offset from the
+    centreline is at most ``half_width``. Returns ``(valid blocks, blocks with h <
+    -below_margin)``.
+    """
+    n_valid = 0
+    n_below = 0
+    for k in range(ds.shape[0]):
+        d = ds[k]
+        obstacle[k] = 0
+        corridor[k] = 0
+        if not d > 0.0:
+            continue
+        n_valid += 1
+        x, y = xs[k], ys[k]
+        h = zs[k] - (a * x + b * y + c)
+        n_below += h < -below_margin
+        if h >= min_height and h <= max_height and d <= max_range:
+            obstacle[k] = 1
+            corridor[k] = _lateral(x, y, centre_y, tan_heading, step) <= half_width
+    return n_valid, n_below
+
+
+@kernel(inline=True)
+def _find(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]  # path halving
+        i = parent[i]
+    return i
+
+
+@kernel(inline=True)
+def _union(parent, i, j):
+    ri, rj = _find(parent, i), _find(parent, j)
+    if ri < rj:
+        parent[rj] = ri
+    elif rj < ri:
+        parent[ri] = rj
+
+
+@kernel
+def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
+    """Objects as connected components of an occupancy grid on the ground.
+
+    Each obstacle block occupies the grid cell of its ground position: column
+    ``floor((x - x0) / cell)``, row ``floor((y - y0) / cell)`` of an (nx, ny) grid (indices
+    clamped to the grid). Occupied cells are 8-connected; a gap of a free cell between two
+    things on the ground splits them, so an object in front of another, or beside it, is
+    its own. ``xs, ys`` float32 and ``obstacle`` uint8 are (rows, cols); ``parent`` and
+    ``ids`` are int32 (nx, ny) scratch; ``labels`` int32 (rows, cols) gets each obstacle
+    block's component, numbered 0, 1, ... in the order of their first block (row-major),
+    and -1 elsewhere. Returns the number of components.
+    """
+    rows, cols = obstacle.shape
+    nx, ny = parent.shape
+    flat = parent.ravel()
+    flat[:] = -1
+    for r in range(rows):
+        for col in range(cols):
+            if obstacle[r, col]:
+                gi = min(max(int(math.floor((xs[r, col] - x0) / cell)), 0), nx - 1)
+                gj = min(max(int(math.floor((ys[r, col] - y0) / cell)), 0), ny - 1)
+                flat[gi * ny + gj] = gi * ny + gj
+    for gi in range(nx):
+        for gj in range(ny):
+            k = gi * ny + gj
+            if flat[k] < 0:
+                continue
+            if gj + 1 < ny and flat[k + 1] >= 0:
+                _union(flat, k, k + 1)
+            if gi + 1 < nx:
+                for dj in range(-1, 2):
+                    if 0 <= gj + dj < ny and flat[k + ny + dj] >= 0:
+                        _union(flat, k, k + ny + dj)
+    ids_flat = ids.ravel()
+    ids_flat[:] = -1
+    n = 0
+    for r in range(rows):
+        for col in range(cols):
+            if not obstacle[r, col]:
+                labels[r, col] = -1
+                continue
+            gi = min(max(int(math.floor((xs[r, col] - x0) / cell)), 0), nx - 1)
+            gj = min(max(int(math.floor((ys[r, col] - y0) / cell)), 0), ny - 1)
+            root = _find(flat, gi * ny + gj)
+            if ids_flat[root] < 0:
+                ids_flat[root] = n
+                n += 1
+            labels[r, col] = ids_flat[root]
+    return n
+
+
+@kernel
+def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
+    """Per component: its extent, sizes, nearest corridor point and a robust depth.
+
+    ``labels`` int32 (rows, cols) from :func:`label_objects` with ``n`` components;
+    ``corridor`` uint8, ``ds`` and ``xs`` float32 (rows, cols). Returns float64 (n, 8) rows
+    ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth``: the first and last
+    block row and column, the number of blocks and of those inside the corridor, the
+    smallest ego x of those (inf if none), and, for components with at least
+    ``min_points`` blocks inside the corridor, the ``percentile`` (0..100, linear
+    interpolation as numpy's default) of the blocks' depths; NaN for the others.
+    """
+    rows, cols = ds.shape
+    stats = np.empty((n, 8))
+    for m in range(n):
+        stats[m, 0] = rows
+        stats[m, 1] = -1.0
+        stats[m, 2] = cols
+        stats[m, 3] = -1.0
+        stats[m, 4] = 0.0
+        stats[m, 5] = 0.0
+        stats[m, 6] = np.inf
+        stats[m, 7] = np.nan
+    for r in range(rows):
+        for col in range(cols):
+            m = labels[r, col]
+            if m < 0:
+                continue
+            stats[m, 0] = min(stats[m, 0], r)
+            stats[m, 1] = max(stats[m, 1], r)
+            stats[m, 2] = min(stats[m, 2], col)
+            stats[m, 3] = max(stats[m, 3], col)
+            stats[m, 4] += 1.0
+            if corridor[r, col]:
+                stats[m, 5] += 1.0
+                stats[m, 6] = min(stats[m, 6], float(xs[r, col]))
+    # the kept components' depths, gathered per component (counting sort)
+    start = np.zeros(n + 1, dtype=np.int64)
+    for m in range(n):
+        kept = stats[m, 5] >= min_points
+        start[m + 1] = start[m] + (int(stats[m, 4]) if kept else 0)
+    values = np.empty(start[n], dtype=np.float64)
+    fill = start[:n].copy()
+    for r in range(rows):
+        for col in range(cols):
+            m = labels[r, col]
+            if m >= 0 and stats[m, 5] >= min_points:
+                values[fill[m]] = ds[r, col]
+                fill[m] += 1
+    for m in range(n):
+        size = start[m + 1] - start[m]
+        if size == 0:
+            continue
+        pos = percentile / 100.0 * (size - 1)
+        lo = int(math.floor(pos))
+        # order statistic lo by selection (O(size)); the next one is the smallest above it
+        segment = np.partition(values[start[m]:start[m + 1]], lo)
+        low = segment[lo]
+        high = segment[lo + 1:].min() if lo + 1 < size else low
+        stats[m, 7] = low + (high - low) * (pos - lo)
+    return stats

@@ -1,0 +1,468 @@
+"""A geometric depth view: what stands on the road inside the corridor the car will drive.
+
+The paper's view (:mod:`monitor.depth.retrieval`) finds objects as edges of the inverse depth
+minus a prior of usual scenes; it knows nothing of the camera, so walls, poles and buildings
+beside the road become objects, and an unusual road looks like one. This view uses what the
+monitor knows, the camera's intrinsics and mounting (:class:`~monitor.geometry.camera.Camera`),
+in the manner of the stereo-vision obstacle detectors:
+
+1. **Points.** The depth map is cut into ``stride x stride`` pixel blocks; each block's
+   depth is back-projected through the block's centre into the ego frame (x forward, y
+   left, z up, origin on the ground). A block's depth is the mean of its valid pixels
+   (NaN, inf and <= 0 are left out), or at an edge (depths spread by more than
+   ``edge_spread``) its nearest: a mean across an edge would be a point floating between
+   the two surfaces, bridging objects. A block without a valid pixel is no point.
+2. **Road surface.** Labayrade et al.'s v-disparity (IV 2002) rests on the fact that a
+   planar road seen by a pinhole camera has a disparity (an inverse depth) affine in the
+   pixel coordinates, a line in the v-disparity image when the camera does not roll; they
+   find the line with a Hough transform. With metric depth and a calibrated camera the same
+   plane is fitted directly in 3D: RANSAC over the blocks that could be road, then least
+   squares on its inliers (twice). The mounting bounds the search: the plane's tilt from the
+   ego frame's ground ``z = 0`` is at most ``max_tilt_deg`` and its height at the ego origin
+   at most ``max_height_offset`` (a wrong depth scale shows as a height offset, the car's
+   pitch and a change of grade as a tilt). Without enough support (``min_ground_fraction``
+   of the blocks) the nominal plane ``z = 0`` is used instead and the result says so.
+3. **Obstacles.** As in the stixel world (Badino, Franke and Pfeiffer, DAGM 2009), an
+   obstacle is what rises above the road in front of the free space: a block whose height
+   above the plane is within ``[min_height, max_height]`` and whose camera depth is within
+   ``max_range``.
+4. **Objects.** Obstacle blocks are grouped on an occupancy grid of the ground (cells of
+   ``cell_size`` metres, as the stixel world's free-space grid): 8-connected components of
+   occupied cells. A free cell between two things splits them, so an object in front of
+   another, or beside it, is its own, while the faces of one object (a car's rear and the
+   side seen at a grazing angle, whose depth jumps from one block to the next) stay
+   together. A component is an object when at least ``min_points`` of its blocks lie in the
+   corridor (lateral offset from the ego path at most the half width, see
+   :mod:`monitor.geometry.corridor`); the whole component counts, so a car cutting in gets
+   its whole box. Each object's 2D box is the extent of its blocks in pixels and its depth
+   the ``depth_percentile`` of its blocks' camera depths, comparable with the detector's
+   ``camera_depth`` (the nearest camera depth of a box).
+
+The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
+d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
+free distance ahead in the corridor, the ground plane and whether it was fitted, the share
+of valid pixels.
+
+A frame the view cannot see through raises :class:`BlindViewError` (the monitor turns it
+into a fail-safe) instead of reporting "nothing there": more than ``max_invalid_fraction``
+of the pixels invalid, more than ``max_corridor_invalid_fraction`` of the pixels that look
+at the corridor's road (up to ``max_range``) invalid, or more than ``max_below_fraction`` of
+the valid blocks more than ``below_margin`` under the road plane used: seeing through the
+road means the mounting or the depth scale is grossly wrong. A surface filling the view
+close ahead is an object at that depth, not an error.
+
+Speed: the one pass over all pixels is :func:`~monitor.depth._geometric_kernels.block_points`;
+everything after it works on the (H / stride) x (W / stride) blocks. ``stride = 4`` gives
+400 x 225 blocks for a 1600 x 900 frame: a pedestrian (0.67 m) at 20 m is still 10 blocks
+wide (see ``benchmarks/bench_geometric.py`` for the timings). Call :func:`warmup` once
+before a real-time loop.
+"""
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+
+from monitor.depth import _geometric_kernels as kernels
+from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.geometry.camera import Camera
+from monitor.geometry.corridor import Corridor
+
+#: spacing of the corridor's centreline table along x, metres
+CORRIDOR_STEP_M = 0.1
+
+#: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
+BLIND_REASONS = {
+    "invalid": "max_invalid_fraction",
+    "corridor_invalid": "max_corridor_invalid_fraction",
+    "below_ground": "max_below_fraction",
+}
+
+
+class BlindViewError(ValueError):
+    """A frame the geometric view cannot see through (never to be read as "nothing there").
+
+    Attributes
+    ----------
+    reason : str
+        A key of :data:`BLIND_REASONS`: ``"invalid"`` (too many invalid pixels),
+        ``"corridor_invalid"`` (too many invalid pixels looking at the corridor's road) or
+        ``"below_ground"`` (too many points under the road plane).
+    fraction : float
+        The measured share, 0..1.
+    limit : float
+        The parameter's limit that it exceeded.
+    """
+
+    def __init__(self, reason: str, fraction: float, limit: float):
+        self.reason, self.fraction, self.limit = reason, float(fraction), float(limit)
+        what = {
+            "invalid": "of the depth map's pixels are invalid (NaN, inf or <= 0)",
+            "corridor_invalid": "of the pixels that look at the corridor's road are invalid",
+            "below_ground": "of the valid points lie under the road plane (mounting or depth "
+                            "scale grossly wrong)",
+        }[reason]
+        super().__init__(f"{100 * fraction:.1f}% {what}, more than {BLIND_REASONS[reason]} = "
+                         f"{100 * limit:.1f}%; the geometric view cannot see this frame")
+
+
+@dataclass(frozen=True)
+class GeometricParams:
+    """The geometric view's parameters (metres, pixels, shares 0..1).
+
+    Parameters
+    ----------
+    stride : int
+        Block size, pixels (>= 1): each ``stride x stride`` block is one point.
+    edge_spread : float
+        A block whose largest valid depth exceeds its smallest by more than this share of
+        the smallest (>= 0) is an edge and reads its smallest depth; otherwise its mean.
+    min_height, max_height : float
+        Metres above the road plane that an obstacle block's point must be within
+        (0 <= min_height < max_height): below is road, kerb or debris too low to matter,
+        above is what the car passes under.
+    corridor_half_width : float
+        Half width of the default straight corridor, metres > 0 (the nuScenes car's half
+        width, 0.95 m, plus a 0.8 m margin: half a 3.5 m lane).
+    max_range : float
+        Farthest camera depth of an obstacle block and of the corridor's road that must be
+        seen, metres, finite > 0 (the paper's 20 m).
+    cell_size : float
+        Side of the ground grid's cells, metres > 0: things on the ground separated by a
+        free cell are different objects.
+    depth_percentile : float
+        Percentile (0..100) of an object's block depths that is its depth d.
+    min_points : int
+        Blocks (>= 1) an object must have inside the corridor.
+    min_size : float
+        Smallest box side, pixels >= 0: a 0.2 m pole 20 m away is 13 px wide in nuScenes'
+        front camera; a narrower box is a sliver of a surface seen edge-on (a car's side
+        beyond its rear), cut off from its object where the grid sees a gap.
+    ground_range : float
+        Blocks farther ahead than this ego x (metres > 0) are not road candidates.
+    ground_tolerance : float
+        Vertical distance (metres > 0) within which a block counts as on the road plane.
+    max_tilt_deg : float
+        Largest tilt of a fitted road plane from the mounting's ground ``z = 0``, degrees in
+        [0, 45).
+    max_height_offset : float
+        Largest height of a fitted road plane at the ego origin, metres >= 0.
+    ransac_iterations : int
+        Plane hypotheses (>= 1).
+    ransac_score_points : int
+        Candidates (>= 3) a hypothesis is scored on (evenly spaced among them).
+    min_ground_fraction : float
+        Share of all blocks that must support a fitted plane; less falls back to ``z = 0``.
+    below_margin : float
+        Metres > 0: a block this far under the road plane is impossible.
+    max_below_fraction : float
+        Largest share of valid blocks under the road by ``below_margin``.
+    max_invalid_fraction : float
+        Largest share of invalid pixels in the frame.
+    max_corridor_invalid_fraction : float
+        Largest share of invalid pixels among those that look at the corridor's road within
+        ``max_range`` (by the mounting's ground plane).
+    seed : int
+        Seed (>= 0) of the RANSAC's random triples (the same every frame).
+    """
+
+    stride: int = 4
+    edge_spread: float = 0.15
+    min_height: float = 0.2
+    max_height: float = 2.5
+    corridor_half_width: float = 1.75
+    max_range: float = DEFAULT_RANGE_M
+    cell_size: float = 0.3
+    depth_percentile: float = 5.0
+    min_points: int = 6
+    min_size: float = 12.0
+    ground_range: float = 30.0
+    ground_tolerance: float = 0.15
+    max_tilt_deg: float = 6.0
+    max_height_offset: float = 0.5
+    ransac_iterations: int = 100
+    ransac_score_points: int = 2000
+    min_ground_fraction: float = 0.02
+    below_margin: float = 0.5
+    max_below_fraction: float = 0.2
+    max_invalid_fraction: float = 0.5
+    max_corridor_invalid_fraction: float = 0.5
+    seed: int = 0
+
+    def __post_init__(self):
+        for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
+                          ("ransac_score_points", 3), ("seed", 0)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+                raise ValueError(f"{name} = {value!r}, must be an integer >= {low}")
+        positive = ("max_range", "corridor_half_width", "cell_size", "ground_range",
+                    "ground_tolerance", "below_margin")
+        for name in positive:
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} = {value!r}, must be a finite number > 0")
+        for name in ("edge_spread", "min_height", "max_height", "max_height_offset", "min_size"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} = {value!r}, must be a finite number of metres >= 0")
+        if not self.min_height < self.max_height:
+            raise ValueError(f"min_height = {self.min_height} and max_height = {self.max_height}: "
+                             "min_height must be below max_height (metres above the road)")
+        if not 0 <= self.depth_percentile <= 100:
+            raise ValueError(f"depth_percentile = {self.depth_percentile!r}, must be in [0, 100]")
+        if not 0 <= self.max_tilt_deg < 45:
+            raise ValueError(f"max_tilt_deg = {self.max_tilt_deg!r}, must be in [0, 45) degrees")
+        for name in ("min_ground_fraction", "max_below_fraction", "max_invalid_fraction",
+                     "max_corridor_invalid_fraction"):
+            value = getattr(self, name)
+            if not 0 <= value <= 1:
+                raise ValueError(f"{name} = {value!r}, must be a share in [0, 1]")
+
+
+@dataclass(frozen=True)
+class GeometricView:
+    """What the geometric view saw in one frame.
+
+    Attributes
+    ----------
+    boxes : ndarray of shape (m, 5), float64
+        The objects S: rows ``cx, cy, w, h, d`` (pixels, metres), nearest first; (0, 5) if
+        none.
+    free_distance : float
+        Ego x (metres, from the ego origin) of the nearest obstacle block of an object
+        inside the corridor; inf when no object is there within ``max_range``.
+    ground : ndarray of shape (3,), float64
+        The road plane used, ``z = a x + b y + c`` as ``(a, b, c)`` in the ego frame.
+    ground_fitted : bool
+        True when ``ground`` was fitted to this frame, False when it is the mounting's
+        ``z = 0`` (too little support for a plane within the bounds).
+    ground_support : float
+        Share of all blocks within ``ground_tolerance`` of the fitted plane (0 for the
+        fallback).
+    valid_fraction : float
+        Share of valid pixels in the frame.
+    corridor_valid_fraction : float
+        Share of valid pixels among those looking at the corridor's road (1 if none do).
+    below_ground_fraction : float
+        Share of valid blocks more than ``below_margin`` under the plane used.
+    """
+
+    boxes: np.ndarray
+    free_distance: float
+    ground: np.ndarray
+    ground_fitted: bool
+    ground_support: float
+    valid_fraction: float
+    corridor_valid_fraction: float
+    below_ground_fraction: float
+
+
+class GeometricRetriever:
+    """The geometric view for one camera: the parameters, the rays and scratch memory.
+
+    Use one per camera in a frame loop: it reuses its scratch buffers from frame to frame
+    (one set per thread, so an instance may be shared between threads).
+
+    Parameters
+    ----------
+    camera : Camera
+        Intrinsics, image size and mounting; its centre must be above the ground.
+    params : GeometricParams
+    """
+
+    def __init__(self, camera: Camera, params: GeometricParams = GeometricParams()):
+        if not isinstance(camera, Camera):
+            raise ValueError(f"camera is a {type(camera).__name__}, expected a Camera")
+        if not isinstance(params, GeometricParams):
+            raise ValueError(f"params is a {type(params).__name__}, expected GeometricParams")
+        origin = camera.cam_to_ego[:3, 3]
+        if not origin[2] > 0:
+            raise ValueError(f"the camera centre is at z = {origin[2]!r} m in the ego frame; it "
+                             "must be above the ground plane z = 0")
+        self.camera, self.params = camera, params
+        s = params.stride
+        rows, cols = -(-camera.height // s), -(-camera.width // s)
+        self._M = np.ascontiguousarray(camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K))
+        self._origin = np.ascontiguousarray(origin)
+        self._blocks = (rows, cols)
+        self._local = threading.local()
+        self._uniforms = np.random.default_rng(params.seed).random((params.ransac_iterations, 3))
+        # where each block centre's ray meets the nominal ground, and the block sizes
+        i0 = np.arange(rows) * s
+        j0 = np.arange(cols) * s
+        v = 0.5 * (i0 + np.minimum(i0 + s, camera.height))
+        u = 0.5 * (j0 + np.minimum(j0 + s, camera.width))
+        rays = (self._M[:, 0, None, None] * u[None, None, :] + self._M[:, 1, None, None] * v[None, :, None]
+                + self._M[:, 2, None, None])
+        with np.errstate(divide="ignore"):
+            t = np.where(rays[2] < 0, -origin[2] / rays[2], np.inf)
+        self._ground_d = t.ravel()
+        self._ground_x = np.where(np.isfinite(t), origin[0] + t * rays[0], np.inf).ravel()
+        self._ground_y = np.where(np.isfinite(t), origin[1] + t * rays[1], np.inf).ravel()
+        self._block_px = np.outer(np.minimum(i0 + s, camera.height) - i0,
+                                  np.minimum(j0 + s, camera.width) - j0).astype(np.int32).ravel()
+        # every point within max_range (camera depth) is origin + d * ray, 0 < d <= max_range,
+        # with the ray inside the corner rays' rectangle: the ground grid and the corridor
+        # table span the extremes of that set (plus a cell)
+        corners = np.array([[0, 0, 1], [camera.width, 0, 1], [0, camera.height, 1],
+                            [camera.width, camera.height, 1]], dtype=np.float64) @ self._M.T
+        low = origin[:2] + params.max_range * np.minimum(corners[:, :2].min(axis=0), 0.0) - params.cell_size
+        high = origin[:2] + params.max_range * np.maximum(corners[:, :2].max(axis=0), 0.0) + params.cell_size
+        self._grid_origin = (float(low[0]), float(low[1]))
+        self._grid_shape = tuple(int(n) for n in np.ceil((high - low) / params.cell_size))
+        self._x_end = float(max(high[0], CORRIDOR_STEP_M))
+        self._default_corridor = Corridor(params.corridor_half_width)
+        self._default_table = self._default_corridor.table(self._x_end, CORRIDOR_STEP_M)
+        self._default_footprint = self._footprint(self._default_corridor, self._default_table)
+
+    def _footprint(self, corridor: Corridor, table) -> tuple[np.ndarray, int]:
+        """The blocks that look at ``corridor``'s road within ``max_range`` (by the mounting's
+        ground plane), and how many pixels they hold."""
+        out = np.empty(self._ground_d.size, dtype=np.int64)
+        n = kernels.footprint_blocks(self._ground_x, self._ground_y, self._ground_d,
+                                     self.params.max_range, *table, CORRIDOR_STEP_M,
+                                     corridor.half_width, out)
+        return out[:n].copy(), int(self._block_px[out[:n]].sum())
+
+    def _scratch(self) -> threading.local:
+        """This thread's buffers (made on its first frame)."""
+        local = self._local
+        if not hasattr(local, "points"):
+            rows, cols = self._blocks
+            local.points = np.empty((4, rows, cols), dtype=np.float32)  # x, y, z, d
+            local.invalid_px = np.empty((rows, cols), dtype=np.int32)
+            local.obstacle = np.empty((rows, cols), dtype=np.uint8)
+            local.corridor = np.empty((rows, cols), dtype=np.uint8)
+            local.labels = np.empty((rows, cols), dtype=np.int32)
+            local.candidates = np.empty(rows * cols, dtype=np.int64)
+            local.grid = np.empty(self._grid_shape, dtype=np.int32)
+            local.grid_ids = np.empty(self._grid_shape, dtype=np.int32)
+        return local
+
+    def __call__(self, depth: np.ndarray, corridor: Corridor | None = None) -> np.ndarray:
+        """The objects S of one depth map: :meth:`view`'s ``boxes``."""
+        return self.view(depth, corridor).boxes
+
+    def view(self, depth: np.ndarray, corridor: Corridor | None = None) -> GeometricView:
+        """What stands on the road inside the corridor, for one depth map.
+
+        Parameters
+        ----------
+        depth : ndarray of shape (H, W), float32
+            Camera-frame depth, metres, of the camera's size; NaN, inf and <= 0 are invalid.
+        corridor : Corridor, optional
+            This frame's corridor (the ego's path and half width); default straight ahead
+            with ``params.corridor_half_width``.
+
+        Returns
+        -------
+        GeometricView
+
+        Raises
+        ------
+        BlindViewError
+            The frame cannot be seen through (see the module's description).
+        ValueError
+            A depth map of the wrong type or size, or a corridor that is not a Corridor.
+        """
+        depth = self._check_depth(depth)
+        params, cam = self.params, self.camera
+        if corridor is None:
+            corridor, table = self._default_corridor, self._default_table
+            footprint = self._default_footprint
+        elif isinstance(corridor, Corridor):
+            table = corridor.table(self._x_end, CORRIDOR_STEP_M)
+            footprint = self._footprint(corridor, table)
+        else:
+            raise ValueError(f"corridor is a {type(corridor).__name__}, expected a Corridor or None")
+        centre_y, tan_heading = table
+        scratch = self._scratch()
+        xs, ys, zs, ds = scratch.points
+        n_invalid = kernels.block_points(depth, params.stride, params.edge_spread, self._M,
+                                         self._origin, xs, ys, zs, ds, scratch.invalid_px)
+        invalid_fraction = n_invalid / depth.size
+        if invalid_fraction > params.max_invalid_fraction:
+            raise BlindViewError("invalid", invalid_fraction, params.max_invalid_fraction)
+        blocks, n_px = footprint
+        corridor_invalid = int(scratch.invalid_px.ravel()[blocks].sum()) / n_px if n_px else 0.0
+        if corridor_invalid > params.max_corridor_invalid_fraction:
+            raise BlindViewError("corridor_invalid", corridor_invalid,
+                                 params.max_corridor_invalid_fraction)
+
+        x, y, z, d = (a.ravel() for a in scratch.points)
+        ground, support = self._fit_ground(x, y, z, d, scratch.candidates)
+        a, b, c = ground
+        n_valid, n_below = kernels.classify(
+            x, y, z, d, a, b, c, params.min_height, params.max_height, params.max_range,
+            params.below_margin, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width,
+            scratch.obstacle.ravel(), scratch.corridor.ravel())
+        below = n_below / n_valid if n_valid else 0.0
+        if below > params.max_below_fraction:
+            raise BlindViewError("below_ground", below, params.max_below_fraction)
+
+        n = kernels.label_objects(xs, ys, scratch.obstacle, *self._grid_origin, params.cell_size,
+                                  scratch.grid, scratch.grid_ids, scratch.labels)
+        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, params.min_points,
+                                     params.depth_percentile)
+        s = params.stride
+        x0, y0 = stats[:, 2] * s, stats[:, 0] * s
+        x1 = np.minimum((stats[:, 3] + 1) * s, cam.width)
+        y1 = np.minimum((stats[:, 1] + 1) * s, cam.height)
+        boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
+        keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
+            & (boxes[:, 3] >= params.min_size)
+        boxes = boxes[keep]
+        return GeometricView(
+            boxes=boxes[np.argsort(boxes[:, 4], kind="stable")],
+            free_distance=float(stats[keep, 6].min()) if keep.any() else math.inf,
+            ground=np.array(ground, dtype=np.float64),
+            ground_fitted=support > 0,
+            ground_support=support,
+            valid_fraction=1.0 - invalid_fraction,
+            corridor_valid_fraction=1.0 - corridor_invalid,
+            below_ground_fraction=below,
+        )
+
+    def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
+        """The road plane ``(a, b, c)`` and its support (share of all blocks), or the
+        mounting's ``(0, 0, 0)`` and 0 when no plane within the bounds has enough support."""
+        p = self.params
+        max_slope = math.tan(math.radians(p.max_tilt_deg))
+        band0 = p.max_height_offset + p.ground_tolerance
+        n = kernels.ground_candidates(x, y, z, d, p.ground_range, band0, max_slope, candidates)
+        a, b, c, score = kernels.ransac_plane(x, y, z, candidates, n, self._uniforms,
+                                              p.ransac_score_points, p.ground_tolerance,
+                                              max_slope, p.max_height_offset)
+        if score == 0:
+            return (0.0, 0.0, 0.0), 0.0
+        for _ in range(2):
+            a, b, c, inliers = kernels.refine_plane(x, y, z, candidates, n, a, b, c,
+                                                    p.ground_tolerance)
+        support = inliers / d.size
+        within = a * a + b * b <= max_slope * max_slope and abs(c) <= p.max_height_offset
+        if support < p.min_ground_fraction or not within:
+            return (0.0, 0.0, 0.0), 0.0
+        return (a, b, c), support
+
+    def _check_depth(self, depth: np.ndarray) -> np.ndarray:
+        if not isinstance(depth, np.ndarray) or depth.dtype != np.float32 or depth.ndim != 2:
+            raise ValueError(
+                f"depth: {type(depth).__name__} of shape {getattr(depth, 'shape', None)} and dtype "
+                f"{getattr(depth, 'dtype', None)}, expected a float32 (H, W) array in metres")
+        expected = (self.camera.height, self.camera.width)
+        if depth.shape != expected:
+            raise ValueError(f"depth is {depth.shape[1]}x{depth.shape[0]} (W x H), the camera's "
+                             f"image is {expected[1]}x{expected[0]}")
+        return np.ascontiguousarray(depth)
+
+
+def warmup() -> None:
+    """Compile (or load from Numba's disk cache) every kernel, on a tiny frame."""
+    front = Camera.nuscenes_front()
+    tiny = Camera(np.diag([0.02, 0.02, 1.0]) @ front.K, 32, 18, front.cam_to_ego)
+    retriever = GeometricRetriever(tiny, GeometricParams(stride=1, min_points=1))
+    depth = np.minimum(retriever._ground_d.reshape(18, 32), 50.0).astype(np.float32)
+    depth[4:12, 12:20] = 8.0  # a wall 8 m ahead above the road: every kernel runs
+    retriever.view(depth)

@@ -1,0 +1,442 @@
+"""The geometric depth view: analytic scenes ray-cast exactly, kernels against NumPy, errors.
+
+Scenes are rendered with :func:`monitor.synthetic.raycast.render_depth` (a flat road and
+oriented boxes) through nuScenes' CAM_FRONT; the sky (inf) reads 80 m, as a saturated
+monocular network reads it. An object's truth is its visible extent in the label map (the
+pixels where it is the nearest hit) and the nearest camera depth of those pixels.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from monitor.depth import _geometric_kernels as kernels
+from monitor.depth.geometric import (
+    BlindViewError, CORRIDOR_STEP_M, GeometricParams, GeometricRetriever, warmup,
+)
+from monitor.geometry.boxes import iou
+from monitor.geometry.camera import Camera
+from monitor.geometry.corridor import Corridor
+from monitor.synthetic.raycast import render_depth
+
+_SKY = 80.0
+CAMERA = Camera.nuscenes_front()
+
+# x, y, z, w, l, h, yaw (ego frame, metres): z is the box centre, so z = h / 2 stands on the road
+CAR_AHEAD = [16.0, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]        # rear face at x = 13.7
+PEDESTRIAN = [9.0, -1.0, 0.885, 0.67, 0.73, 1.77, 0.0]      # in the corridor's right half
+WALL = [15.0, 6.5, 2.0, 0.4, 30.0, 4.0, 0.0]                # beside the road, left
+POLE = [8.0, -5.5, 2.0, 0.2, 0.2, 4.0, 0.0]                 # on the sidewalk, right
+CAR_NEXT_LANE = [14.0, -3.5, 0.865, 1.95, 4.6, 1.73, 0.0]   # the lane to the right
+
+
+@pytest.fixture(scope="module", autouse=True)
+def compiled():
+    warmup()
+
+
+def _render(boxes, camera=CAMERA):
+    render = render_depth(camera, np.array(boxes, dtype=np.float64).reshape(-1, 7))
+    return np.minimum(render.depth, np.float32(_SKY)), render.labels
+
+
+def _truth(labels, depth, k):
+    """Visible extent ``cx, cy, w, h`` and nearest depth of box k (pixel i spans [i, i + 1))."""
+    rows, cols = np.nonzero(labels == k + 1)
+    x0, x1, y0, y1 = cols.min(), cols.max() + 1, rows.min(), rows.max() + 1
+    return np.array([(x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0,
+                     float(depth[labels == k + 1].min())])
+
+
+def _match(found, truth):
+    """The found box with the largest IoU with ``truth``, and that IoU."""
+    scores = np.array([iou(f, truth) for f in found])
+    best = int(np.argmax(scores))
+    return found[best], scores[best]
+
+
+def _pitched(camera, degrees):
+    """``camera`` with its mounting pitched nose-down by ``degrees`` about the ego y axis
+    through the camera centre (the world as seen from a car on a grade change)."""
+    a = math.radians(degrees)
+    R = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0],
+                  [-math.sin(a), 0.0, math.cos(a)]])  # +a turns +x (forward) towards -z
+    T = camera.cam_to_ego.copy()
+    T[:3, :3] = R @ T[:3, :3]
+    return Camera(camera.K, camera.width, camera.height, T)
+
+
+# --------------------------------------------------------------------------- analytic scenes
+
+def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
+    boxes = [CAR_AHEAD, PEDESTRIAN, WALL, POLE, CAR_NEXT_LANE]
+    depth, labels = _render(boxes)
+    view = GeometricRetriever(CAMERA).view(depth)
+    assert view.ground_fitted and view.valid_fraction == 1.0
+    np.testing.assert_allclose(view.ground, [0.0, 0.0, 0.0], atol=5e-3)  # the road is z = 0
+    assert view.boxes.shape == (2, 5)  # the pedestrian and the car ahead, nothing else
+    for k in (1, 0):  # nearest first
+        truth = _truth(labels, depth, k)
+        found, score = _match(view.boxes, truth)
+        # the blocks lose the bottom 0.2 m (the height band) and up to a block (4 px) per side
+        assert score > 0.8
+        # fronto-parallel faces: every block of the object reads its one depth
+        assert found[4] == pytest.approx(truth[4], rel=1e-3)
+    # the pedestrian's front face is at x = 9 - 0.73 / 2 = 8.635 m
+    assert view.free_distance == pytest.approx(8.635, abs=0.01)
+    assert view.boxes[0, 4] < view.boxes[1, 4]
+
+
+def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
+    depth, _ = _render([WALL, POLE])
+    view = GeometricRetriever(CAMERA).view(depth)
+    assert view.boxes.shape == (0, 5) and view.boxes.dtype == np.float64
+    assert view.free_distance == math.inf and view.ground_fitted
+
+
+def test_objects_beyond_the_range_limit_are_not_reported():
+    far_car = [26.0, 0.0, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at 23.7 m: 22 m camera depth
+    depth, _ = _render([far_car])
+    assert GeometricRetriever(CAMERA)(depth).shape == (0, 5)
+    view = GeometricRetriever(CAMERA, GeometricParams(max_range=30.0)).view(depth)
+    assert view.boxes.shape == (1, 5)
+    assert view.boxes[0, 4] == pytest.approx(23.7 - CAMERA.cam_to_ego[0, 3], rel=1e-3)
+
+
+@pytest.mark.parametrize("pitch_deg", [-3.0, 3.0])
+def test_a_tilted_road_is_fitted_and_its_objects_found(pitch_deg):
+    # the camera pitched by the grade change: in the frame the view believes in, the road
+    # and everything on it turn by the same angle about the camera centre
+    boxes = [CAR_AHEAD, PEDESTRIAN, POLE]
+    depth, labels = _render(boxes, _pitched(CAMERA, pitch_deg))
+    view = GeometricRetriever(CAMERA).view(depth)
+    assert view.ground_fitted
+    a, b, c = view.ground
+    # nose down by p: the road rises ahead at slope tan(p); it passes under the camera
+    # (x = 1.70 m, z = 1.51 m) at depth 1.51 / cos(p) below it along the tilted normal
+    slope = math.tan(math.radians(pitch_deg))
+    assert a == pytest.approx(slope, abs=2e-3) and abs(b) < 2e-3
+    cam_x, cam_z = CAMERA.cam_to_ego[0, 3], CAMERA.cam_to_ego[2, 3]
+    assert c == pytest.approx(cam_z - cam_z / math.cos(math.radians(pitch_deg)) - slope * cam_x,
+                              abs=0.02)
+    assert view.boxes.shape == (2, 5)
+    for k in (0, 1):
+        truth = _truth(labels, depth, k)
+        found, score = _match(view.boxes, truth)
+        assert score > 0.75 and found[4] == pytest.approx(truth[4], rel=0.01)
+
+
+def test_a_mounting_pitched_beyond_the_bounds_is_blind_not_empty():
+    # pitched up by 8 degrees: the road reads farther than the mounting says, under z = 0
+    depth, _ = _render([CAR_AHEAD], _pitched(CAMERA, -8.0))
+    with pytest.raises(BlindViewError, match="under the road plane") as error:
+        GeometricRetriever(CAMERA).view(depth)
+    assert error.value.reason == "below_ground" and error.value.fraction > 0.2
+
+
+def test_a_surface_filling_the_view_at_1_m_is_one_near_object():
+    depth = np.ones((CAMERA.height, CAMERA.width), dtype=np.float32)
+    view = GeometricRetriever(CAMERA).view(depth)
+    assert not view.ground_fitted and view.ground_support == 0.0  # no road to be seen
+    np.testing.assert_array_equal(view.ground, [0.0, 0.0, 0.0])
+    assert view.boxes.shape == (1, 5)
+    np.testing.assert_allclose(view.boxes[0], [800.0, 450.0, 1600.0, 900.0, 1.0])
+    # the surface is 1 m ahead of the camera, which is 1.70 m ahead of the ego origin (the
+    # camera looks along +x up to 0.4 degrees)
+    assert view.free_distance == pytest.approx(CAMERA.cam_to_ego[0, 3] + 1.0, abs=0.01)
+
+
+def test_40_percent_invalid_pixels_scattered_still_finds_the_objects():
+    boxes = [CAR_AHEAD, PEDESTRIAN, WALL]
+    depth, labels = _render(boxes)
+    holes = np.random.default_rng(0).random(depth.shape) < 0.4
+    bad = np.array([np.nan, np.inf, 0.0, -1.0], dtype=np.float32)
+    damaged = np.where(holes, bad[np.arange(depth.size).reshape(depth.shape) % 4], depth)
+    view = GeometricRetriever(CAMERA).view(damaged.astype(np.float32))
+    assert view.valid_fraction == pytest.approx(0.6, abs=0.005)
+    assert view.corridor_valid_fraction == pytest.approx(0.6, abs=0.01)
+    assert view.boxes.shape == (2, 5)
+    for k in (0, 1):
+        truth = _truth(labels, depth, k)
+        found, score = _match(view.boxes, truth)
+        assert score > 0.8 and found[4] == pytest.approx(truth[4], rel=1e-3)
+
+
+def test_invalid_pixels_over_the_corridor_make_the_view_blind():
+    depth, _ = _render([CAR_AHEAD])
+    covered = depth.copy()
+    covered[500:, 500:1100] = np.nan  # the road ahead: 27 % of the frame
+    with pytest.raises(BlindViewError, match="look at the corridor") as error:
+        GeometricRetriever(CAMERA).view(covered)
+    assert error.value.reason == "corridor_invalid" and error.value.fraction > 0.5
+    covered = depth.copy()
+    covered[:500] = np.inf  # 56 % of the frame, the corridor's road untouched
+    with pytest.raises(BlindViewError, match="depth map's pixels are invalid") as error:
+        GeometricRetriever(CAMERA).view(covered)
+    assert error.value.reason == "invalid"
+    assert error.value.fraction == pytest.approx(500 / 900)
+
+
+def test_a_curved_path_keeps_what_lies_on_it():
+    # a car in the next lane to the left, 14 m ahead: off the straight corridor, on an arc
+    # y = R - sqrt(R^2 - x^2) through (14, 3.5): R = (14^2 + 3.5^2) / 7 = 29.75 m
+    car = [16.3, 3.5, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 14
+    depth, labels = _render([car])
+    retriever = GeometricRetriever(CAMERA)
+    assert retriever(depth).shape == (0, 5)
+    truth = _truth(labels, depth, 0)
+    arc = Corridor(1.75, curvature=1 / 29.75)
+    xs = np.linspace(0.0, 29.0, 59)
+    polyline = Corridor(1.75, polyline=np.column_stack([xs, 29.75 - np.sqrt(29.75**2 - xs**2)]))
+    for corridor in (arc, polyline):
+        found = retriever(depth, corridor)
+        assert found.shape == (1, 5)
+        assert iou(found[0], truth) > 0.8 and found[0, 4] == pytest.approx(truth[4], rel=1e-3)
+
+
+def test_the_view_is_deterministic_and_the_call_gives_the_views_boxes():
+    depth, _ = _render([CAR_AHEAD, PEDESTRIAN])
+    retriever = GeometricRetriever(CAMERA)
+    first = retriever.view(depth)
+    np.testing.assert_array_equal(first.boxes, retriever(depth))
+    np.testing.assert_array_equal(first.ground, GeometricRetriever(CAMERA).view(depth).ground)
+
+
+# --------------------------------------------------------------------------- kernels vs NumPy
+
+def _small_camera():
+    return Camera(np.diag([0.1, 0.1, 1.0]) @ CAMERA.K, 160, 90, CAMERA.cam_to_ego)
+
+
+def _block_points_numpy(depth, stride, edge_spread, camera):
+    height, width = depth.shape
+    rows, cols = -(-height // stride), -(-width // stride)
+    valid = np.isfinite(depth) & (depth > 0)
+    out = np.zeros((4, rows, cols))
+    invalid = np.zeros((rows, cols), dtype=np.int64)
+    M = camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K)
+    for r in range(rows):
+        for c in range(cols):
+            i0, i1 = r * stride, min(r * stride + stride, height)
+            j0, j1 = c * stride, min(c * stride + stride, width)
+            n = valid[i0:i1, j0:j1].sum()
+            invalid[r, c] = (i1 - i0) * (j1 - j0) - n
+            if n:
+                block = depth[i0:i1, j0:j1][valid[i0:i1, j0:j1]].astype(np.float64)
+                edge = block.max() > (1 + edge_spread) * block.min()
+                d = block.min() if edge else block.sum() / n
+                point = camera.cam_to_ego[:3, 3] + d * M @ [(j0 + j1) / 2, (i0 + i1) / 2, 1.0]
+                out[:, r, c] = [*point, d]
+    return out, invalid
+
+
+@pytest.mark.parametrize("stride, edge_spread", [(1, 0.15), (3, 0.15), (4, 0.15), (4, 100.0)])
+def test_block_points_equals_numpy(stride, edge_spread):
+    camera = _small_camera()
+    rng = np.random.default_rng(stride)
+    depth = rng.uniform(10.0, 12.0, (90, 160)).astype(np.float32)
+    depth[:, 80:] = rng.uniform(3.0, 40.0, (90, 80))  # smooth on the left, edges on the right
+    depth[rng.random(depth.shape) < 0.2] = np.nan
+    depth[rng.random(depth.shape) < 0.05] = -2.0
+    depth[:9, :9] = np.inf  # a block (or more) with no valid pixel
+    rows, cols = -(-90 // stride), -(-160 // stride)
+    points = np.empty((4, rows, cols), dtype=np.float32)
+    invalid = np.empty((rows, cols), dtype=np.int32)
+    M = np.ascontiguousarray(camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K))
+    n = kernels.block_points(depth, stride, edge_spread, M, np.ascontiguousarray(camera.cam_to_ego[:3, 3]),
+                             *points, invalid)
+    expected, expected_invalid = _block_points_numpy(depth, stride, edge_spread, camera)
+    np.testing.assert_array_equal(invalid, expected_invalid)
+    assert n == expected_invalid.sum() == np.count_nonzero(~(np.isfinite(depth) & (depth > 0)))
+    np.testing.assert_allclose(points, expected, rtol=1e-5, atol=1e-4)
+
+
+def _cloud(seed, n=3000):
+    """Points of a road ``z = 0.02 x - 0.01 y + 0.1`` with noise, plus boxes of clutter."""
+    rng = np.random.default_rng(seed)
+    x, y = rng.uniform(2.0, 35.0, n), rng.uniform(-10.0, 10.0, n)
+    z = 0.02 * x - 0.01 * y + 0.1 + rng.normal(0.0, 0.03, n)
+    clutter = rng.random(n) < 0.3
+    z[clutter] = rng.uniform(0.2, 3.0, clutter.sum())
+    d = rng.uniform(1.0, 30.0, n)
+    d[rng.random(n) < 0.05] = 0.0  # no point
+    return [a.astype(np.float32) for a in (x, y, z, d)]
+
+
+def test_ground_candidates_ransac_and_refine_equal_numpy():
+    x, y, z, d = _cloud(1)
+    out = np.empty(x.size, dtype=np.int64)
+    band0, slope, x_max = 0.65, math.tan(math.radians(6.0)), 30.0
+    n = kernels.ground_candidates(x, y, z, d, x_max, band0, slope, out)
+    x64, y64, z64 = (a.astype(np.float64) for a in (x, y, z))
+    mask = (d > 0) & (x >= 0) & (x <= x_max) & (np.abs(z64) <= band0 + slope * np.hypot(x64, y64))
+    np.testing.assert_array_equal(out[:n], np.flatnonzero(mask))
+    idx = out[:n]
+
+    uniforms = np.random.default_rng(5).random((40, 3))
+    n_score, tol, max_offset = 500, 0.1, 0.5
+    best, best_score = (0.0, 0.0, 0.0), 0
+    step = max(1, n // n_score)
+    for u in uniforms:  # the textbook: plane through three points, inliers counted
+        p = np.array([[x64[i], y64[i], z64[i]] for i in idx[np.minimum((u * n).astype(int), n - 1)]])
+        normal = np.cross(p[1] - p[0], p[2] - p[0])
+        if abs(normal[2]) <= 1e-6 * np.linalg.norm(normal):
+            continue
+        a, b = -normal[0] / normal[2], -normal[1] / normal[2]
+        c = p[0, 2] - a * p[0, 0] - b * p[0, 1]
+        if a * a + b * b > slope**2 or abs(c) > max_offset:
+            continue
+        scored = idx[::step]
+        score = np.count_nonzero(np.abs(z64[scored] - (a * x64[scored] + b * y64[scored] + c)) <= tol)
+        if score > best_score:
+            best, best_score = (a, b, c), score
+    *plane, score = kernels.ransac_plane(x, y, z, idx, n, uniforms, n_score, tol, slope, max_offset)
+    assert score == best_score > 0
+    # the same triple; a nearly collinear one amplifies the last bits of the arithmetic
+    np.testing.assert_allclose(plane, best, rtol=1e-5, atol=1e-7)
+
+    *refit, inliers = kernels.refine_plane(x, y, z, idx, n, *plane, tol)
+    a, b, c = plane
+    near = idx[np.abs(z64[idx] - (a * x64[idx] + b * y64[idx] + c)) <= tol]
+    lstsq = np.linalg.lstsq(np.column_stack([x64[near], y64[near], np.ones(near.size)]), z64[near],
+                            rcond=None)[0]
+    assert inliers == near.size
+    np.testing.assert_allclose(refit, lstsq, rtol=1e-6, atol=1e-8)
+    np.testing.assert_allclose(refit, [0.02, -0.01, 0.1], atol=0.01)  # the road it was made of
+
+
+def test_ransac_finds_nothing_when_every_plane_is_out_of_bounds():
+    x, y, z, d = _cloud(2)
+    steep = (z + 0.3 * x).astype(np.float32)  # a 17 degree slope: beyond max_tilt
+    idx = np.arange(x.size, dtype=np.int64)
+    *plane, score = kernels.ransac_plane(x, y, steep, idx, x.size, np.random.default_rng(0).random((30, 3)),
+                                         1000, 0.1, math.tan(math.radians(6.0)), 0.5)
+    assert score == 0 and plane == [0.0, 0.0, 0.0]
+
+
+def test_classify_equals_numpy():
+    x, y, z, d = _cloud(3)
+    corridor = Corridor(1.75, curvature=0.02)
+    centre, tan = corridor.table(40.0, CORRIDOR_STEP_M)
+    obstacle, inside = np.empty(x.size, np.uint8), np.empty(x.size, np.uint8)
+    plane = (0.02, -0.01, 0.1)
+    n_valid, n_below = kernels.classify(x, y, z, d, *plane, 0.2, 2.5, 20.0, 0.05, centre, tan,
+                                        CORRIDOR_STEP_M, 1.75, obstacle, inside)
+    x64, y64, z64, d64 = (a.astype(np.float64) for a in (x, y, z, d))
+    h = z64 - (0.02 * x64 - 0.01 * y64 + 0.1)
+    valid = d64 > 0
+    expected = valid & (h >= 0.2) & (h <= 2.5) & (d64 <= 20.0)
+    row = np.minimum((x64 / CORRIDOR_STEP_M).astype(int), centre.size - 1)
+    tangent_x = (row + 0.5) * CORRIDOR_STEP_M  # the centreline's tangent line at the row's middle
+    lateral = np.abs(y64 - centre[row] - tan[row] * (x64 - tangent_x)) / np.hypot(1.0, tan[row])
+    np.testing.assert_array_equal(obstacle, expected)
+    np.testing.assert_array_equal(inside, expected & (lateral <= 1.75))
+    assert n_valid == valid.sum() and n_below == (valid & (h < -0.05)).sum()
+    assert 0 < inside.sum() < expected.sum()
+
+
+def test_footprint_blocks_equals_numpy():
+    rng = np.random.default_rng(4)
+    gx, gy = rng.uniform(-2.0, 40.0, 3000), rng.uniform(-6.0, 6.0, 3000)
+    gd = np.where(rng.random(3000) < 0.2, np.inf, gx * 1.1)  # no ground hit above the horizon
+    centre, tan = Corridor(1.75, curvature=-0.02).table(40.0, CORRIDOR_STEP_M)
+    out = np.empty(3000, dtype=np.int64)
+    n = kernels.footprint_blocks(gx, gy, gd, 20.0, centre, tan, CORRIDOR_STEP_M, 1.75, out)
+    row = np.clip((gx / CORRIDOR_STEP_M).astype(int), 0, centre.size - 1)
+    lateral = np.abs(gy - centre[row] - tan[row] * (gx - (row + 0.5) * CORRIDOR_STEP_M)) \
+        / np.hypot(1.0, tan[row])
+    expected = np.flatnonzero((gd <= 20.0) & (gx >= 0) & (lateral <= 1.75))
+    assert 0 < expected.size < 3000
+    np.testing.assert_array_equal(out[:n], expected)
+
+
+def _label_numpy(xs, ys, obstacle, x0, y0, cell, shape):
+    """Occupancy grid labelled by scipy (8-connected), numbered by first block (row-major)."""
+    gi = np.clip(np.floor((xs - x0) / cell).astype(int), 0, shape[0] - 1)
+    gj = np.clip(np.floor((ys - y0) / cell).astype(int), 0, shape[1] - 1)
+    grid = np.zeros(shape, bool)
+    grid[gi[obstacle], gj[obstacle]] = True
+    cells, _ = ndimage.label(grid, structure=np.ones((3, 3)))
+    raw = np.where(obstacle, cells[gi, gj], 0)
+    labels = np.full(xs.shape, -1)
+    order = {}
+    for k in np.flatnonzero(raw.ravel()):
+        labels.flat[k] = order.setdefault(raw.flat[k], len(order))
+    return labels, len(order)
+
+
+def test_label_objects_equals_scipy_on_the_occupancy_grid():
+    rng = np.random.default_rng(7)
+    xs = rng.uniform(0.0, 12.0, (30, 40)).astype(np.float32)
+    ys = rng.uniform(-6.0, 6.0, (30, 40)).astype(np.float32)
+    obstacle = (rng.random((30, 40)) < 0.15).astype(np.uint8)
+    shape = (40, 40)
+    parent, ids = np.empty(shape, np.int32), np.empty(shape, np.int32)
+    labels = np.empty((30, 40), np.int32)
+    n = kernels.label_objects(xs, ys, obstacle, 0.0, -6.0, 0.3, parent, ids, labels)
+    expected, n_expected = _label_numpy(xs, ys, obstacle.astype(bool), 0.0, -6.0, 0.3, shape)
+    assert n == n_expected > 5
+    np.testing.assert_array_equal(labels, expected)
+
+
+def test_object_stats_equals_numpy():
+    rng = np.random.default_rng(8)
+    labels = rng.integers(-1, 6, (20, 30)).astype(np.int32)
+    labels[labels == 4] = -1  # component 4 has no block
+    ds = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
+    xs = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
+    corridor = (rng.random((20, 30)) < 0.1).astype(np.uint8) * (labels >= 0)
+    corridor[labels == 5] = 0  # component 5 lies outside the corridor
+    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, 3, 5.0)
+    for m in range(6):
+        rows, cols = np.nonzero(labels == m)
+        inside = (labels == m) & (corridor > 0)
+        if m == 4:
+            assert stats[m, 4] == 0 and np.isnan(stats[m, 7])
+            continue
+        np.testing.assert_array_equal(stats[m, :6], [rows.min(), rows.max(), cols.min(), cols.max(),
+                                                     rows.size, inside.sum()])
+        assert stats[m, 6] == (xs[inside].min() if inside.any() else np.inf)
+        if inside.sum() >= 3:
+            assert stats[m, 7] == pytest.approx(np.percentile(ds[labels == m].astype(np.float64), 5.0),
+                                                rel=1e-12)
+        else:
+            assert np.isnan(stats[m, 7])
+    assert np.isnan(stats[5, 7])
+
+
+# --------------------------------------------------------------------------- errors
+
+@pytest.mark.parametrize("field, value, text", [
+    ("stride", 0, "stride = 0, must be an integer >= 1"),
+    ("stride", 2.0, "stride = 2.0"),
+    ("min_height", 3.0, "min_height must be below max_height"),
+    ("max_range", math.inf, "max_range = inf, must be a finite number > 0"),
+    ("cell_size", 0.0, "cell_size = 0.0"),
+    ("depth_percentile", 101.0, r"depth_percentile = 101.0, must be in \[0, 100\]"),
+    ("max_tilt_deg", 50.0, "max_tilt_deg = 50.0"),
+    ("max_invalid_fraction", 1.5, r"max_invalid_fraction = 1.5, must be a share in \[0, 1\]"),
+    ("seed", -1, "seed = -1"),
+])
+def test_params_are_validated(field, value, text):
+    with pytest.raises(ValueError, match=text):
+        GeometricParams(**{field: value})
+
+
+def test_bad_input_is_refused_with_a_clear_message():
+    retriever = GeometricRetriever(_small_camera())
+    with pytest.raises(ValueError, match="expected a float32"):
+        retriever(np.ones((90, 160)))
+    with pytest.raises(ValueError, match="depth is 90x160 .* image is 160x90"):
+        retriever(np.ones((160, 90), np.float32))
+    with pytest.raises(ValueError, match="corridor is a float"):
+        retriever(np.ones((90, 160), np.float32), 0.02)
+    with pytest.raises(ValueError, match="expected a Camera"):
+        GeometricRetriever("front")
+    low = CAMERA.cam_to_ego.copy()
+    low[2, 3] = -0.1
+    with pytest.raises(ValueError, match="above the ground"):
+        GeometricRetriever(Camera(CAMERA.K, CAMERA.width, CAMERA.height, low))
