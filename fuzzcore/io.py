@@ -1,19 +1,18 @@
 """Loading and saving rule bases; the format follows the file extension.
 
 Saving never leaves a half-written file: the text goes to a temporary file beside the
-target, which then replaces it in one step (:func:`write_text_atomic`); if anything fails
-first, the old file is untouched. :func:`check_save_path` lets a command check where it
-will write before it starts a long piece of work.
+target, which then replaces it in one step (:func:`fuzzcore.outputs.write_text`); if
+anything fails first, the old file is untouched. :func:`check_save_path` lets a command
+check where it will write before it starts a long piece of work.
 """
 from __future__ import annotations
 
-import os
-import secrets
 from pathlib import Path
 from typing import Callable, Iterable
 
 from . import fis_format, yaml_format
 from .errors import RuleBaseError
+from .outputs import check_output, write_text
 from .system import FuzzySystem
 
 #: extension -> reader(path) -> FuzzySystem
@@ -54,38 +53,15 @@ def save(system: FuzzySystem, path: str | Path) -> None:
         text = dumps(system)
     except RuleBaseError as exc:
         raise RuleBaseError(exc.detail, source=str(path), place=exc.place) from None
-    write_text_atomic(path, text)
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write ``text`` (UTF-8) to ``path`` whole or not at all.
-
-    The text is written and flushed to disk in a new file beside ``path`` (same folder, so
-    the rename stays on one file system), which then replaces ``path`` (``os.replace``).
-    A failure at any point (disk full, interrupted) removes the temporary file and leaves
-    an existing ``path`` as it was. A replaced file keeps its permission bits; a new one
-    gets the usual ones (0666 less the umask).
-    """
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{secrets.token_hex(4)}.tmp")
-    mode = os.stat(path).st_mode & 0o7777 if path.exists() else 0o666
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, mode)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        if path.exists():
-            os.chmod(tmp, mode)  # os.open applied the umask
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    write_text(path, text)
 
 
 def check_save_path(path: str | Path, sources: Iterable[str | Path] = (), overwrite: bool = False,
                     overwrite_hint: str = "overwrite=True") -> Path:
     """Check, before any work, that a rule base can be saved at ``path``; return it as a Path.
+
+    The extension must name a format of :data:`WRITERS`; the rest is
+    :func:`fuzzcore.outputs.check_output`.
 
     Parameters
     ----------
@@ -110,16 +86,4 @@ def check_save_path(path: str | Path, sources: Iterable[str | Path] = (), overwr
     """
     path = Path(path)
     _format(path, WRITERS)
-    folder = path.parent
-    if not folder.is_dir():
-        raise FileNotFoundError(f"{path}: the folder {str(folder)!r} does not exist; create it first")
-    if path.is_dir():
-        raise FileExistsError(f"{path} is a folder; expected a file name ending {path.suffix or '.yaml'}")
-    if path.exists():
-        for source in sources:
-            if Path(source).exists() and os.path.samefile(path, source):
-                raise ValueError(f"{path} is the same file as {source}, which is read: write to another file")
-        if not overwrite:
-            raise FileExistsError(f"{path} already exists; choose another name or allow replacing it "
-                                  f"({overwrite_hint})")
-    return path
+    return check_output(path, WRITERS, sources, overwrite, option=overwrite_hint, what="rule base")

@@ -29,11 +29,10 @@ Schema (every key but ``inputs``, ``outputs`` and ``rules`` is optional)::
         connective: or             # one-clause rules only: the connective MATLAB keeps
                                    # (``: 2`` in a .fis rule line); it does not change the result
 
-Reading uses YAML's safe loader only (a tag that would construct an object is refused),
-refuses duplicate keys and unknown keys, nesting deeper than :data:`MAX_DEPTH` levels
-(which real rule bases never need, and which would otherwise exhaust Python's recursion)
-and text that is not UTF-8, and reports errors with the file, the line and the YAML path
-of the offending entry.
+Reading uses :func:`fuzzcore.strict_yaml.load` (YAML's safe loader; duplicate keys and
+nesting deeper than :data:`~fuzzcore.strict_yaml.MAX_DEPTH` levels refused), refuses
+unknown keys and text that is not UTF-8, and reports errors with the file, the line and
+the YAML path of the offending entry.
 
 Cut-short files. :func:`dumps` opens the text with :data:`HEADER` and closes it with the
 line :data:`END`. A file that starts with the header but has no end line was cut short (an
@@ -55,6 +54,8 @@ from typing import Any
 
 import yaml
 
+from . import strict_yaml
+from .strict_yaml import LineDict
 from .errors import RuleBaseError
 from .membership import check_params, resolve_kind
 from .rules import CONNECTIVES, Rule, format_rule, parse_rule
@@ -67,55 +68,10 @@ _SETTINGS = {
     "no_rule_fired": "no_rule_fired", "type": "type", "name": "name", "description": "description",
 }
 _TOP_KEYS = set(_SETTINGS) | {"inputs", "outputs", "rules", "metadata"}
-#: deepest nesting of YAML collections read (a rule base needs 5; metadata a few more)
-MAX_DEPTH = 32
 #: first line of a file :func:`dumps` writes; such a file must contain the line :data:`END`
 HEADER = "# fuzzy rule base (fuzzcore YAML; see fuzzcore/yaml_format.py for the schema); it ends with the line below"
 #: last line of a file :func:`dumps` writes
 END = "# end of rule base"
-
-
-class _Map(dict):
-    """A mapping that remembers the line of each key (1-based)."""
-
-    line: int = 0
-    key_lines: dict
-
-
-class _StrictLoader(yaml.SafeLoader):
-    """Safe loading, plus: duplicate keys are errors, mappings remember their lines, nesting
-    deeper than :data:`MAX_DEPTH` is an error."""
-
-    _depth = 0
-
-    def compose_node(self, parent, index):
-        self._depth += 1
-        try:
-            if self._depth > MAX_DEPTH:
-                mark = self.peek_event().start_mark
-                raise RuleBaseError(f"lists or mappings nested more than {MAX_DEPTH} levels deep; a rule base "
-                                    "needs a handful", place=f"line {mark.line + 1}")
-            return super().compose_node(parent, index)
-        finally:
-            self._depth -= 1
-
-    def construct_yaml_map(self, node):
-        data = _Map()
-        data.line = node.start_mark.line + 1
-        data.key_lines = {}
-        yield data
-        self.flatten_mapping(node)
-        for key_node, value_node in node.value:
-            key = self.construct_object(key_node, deep=True)
-            line = key_node.start_mark.line + 1
-            if key in data.key_lines:
-                raise RuleBaseError(f"duplicate key {key!r} (first at line {data.key_lines[key]})",
-                                    place=f"line {line}")
-            data.key_lines[key] = line
-            data[key] = self.construct_object(value_node, deep=True)
-
-
-_StrictLoader.add_constructor("tag:yaml.org,2002:map", _StrictLoader.construct_yaml_map)
 
 
 #: the largest finite float64, as an integer (a larger YAML integer cannot be a parameter)
@@ -131,13 +87,13 @@ class _Reader:
 
     def error(self, message: str, path: str, where: Any = None, key: Any = None) -> RuleBaseError:
         line = None
-        if isinstance(where, _Map):
+        if isinstance(where, LineDict):
             line = where.key_lines.get(key, where.line) if key is not None else where.line
         place = f"line {line}, {path}" if line else path
         return RuleBaseError(message, source=self.source, place=place)
 
     def mapping(self, value: Any, path: str, allowed: set[str], required: set[str] = frozenset(),
-                parent: Any = None, key: Any = None) -> _Map:
+                parent: Any = None, key: Any = None) -> LineDict:
         if not isinstance(value, dict):
             raise self.error(f"expected a mapping, got {type(value).__name__} {value!r}", path, parent, key)
         unknown = sorted(str(k) for k in value if k not in allowed)
@@ -163,7 +119,7 @@ class _Reader:
             raise self.error(f"{value!r} is not a finite number{hint}", path, parent, key)
         return float(value)
 
-    def variable(self, name: Any, spec: Any, path: str, parent: _Map) -> Variable:
+    def variable(self, name: Any, spec: Any, path: str, parent: LineDict) -> Variable:
         spec = self.mapping(spec, path, {"range", "terms"}, {"range", "terms"}, parent, name)
         rng = spec["range"]
         if not isinstance(rng, list) or len(rng) != 2:
@@ -194,7 +150,7 @@ class _Reader:
         except RuleBaseError as exc:
             raise self.error(exc.detail, path, parent, name) from None
 
-    def connective(self, rule: Rule, value: Any, path: str, item: _Map) -> Rule:
+    def connective(self, rule: Rule, value: Any, path: str, item: LineDict) -> Rule:
         """``rule`` with the connective an explicit ``connective:`` key gives a one-clause rule."""
         if value not in CONNECTIVES:
             raise self.error(f"connective {value!r}: expected 'and' or 'or'", path, item, "connective")
@@ -203,7 +159,7 @@ class _Reader:
                              f"clauses with {rule.connective!r}", path, item, "connective")
         return replace(rule, connective=value)
 
-    def variables(self, data: _Map, key: str) -> tuple[Variable, ...]:
+    def variables(self, data: LineDict, key: str) -> tuple[Variable, ...]:
         spec = data[key]
         if not isinstance(spec, dict) or not spec:
             raise self.error("expected a non-empty mapping of variable name: {range, terms}", key, data, key)
@@ -256,7 +212,7 @@ class _Reader:
 
 
 def _parse(text: str, source: str | None) -> Any:
-    """Strict safe YAML (mappings as :class:`_Map`); any failure is a :class:`RuleBaseError`."""
+    """Strict safe YAML (:func:`fuzzcore.strict_yaml.load`); any failure is a :class:`RuleBaseError`."""
     lines = text.splitlines()
     if lines and lines[0].rstrip() == HEADER and END not in (line.rstrip() for line in lines):
         raise RuleBaseError(f"the file starts with fuzzcore's header line but has no closing line {END!r}: it was "
@@ -264,20 +220,13 @@ def _parse(text: str, source: str | None) -> Any:
                             "copy; if you removed the line while editing, put it back at the end (or remove the "
                             "first line)", source=source, place=f"line {len(lines)}")
     try:
-        return yaml.load(text, Loader=_StrictLoader)
-    except RuleBaseError as exc:
+        return strict_yaml.load(text)
+    except strict_yaml.YamlError as exc:
         raise RuleBaseError(exc.detail, source=source, place=exc.place) from None
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        place = f"line {mark.line + 1}" if mark else None
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise RuleBaseError(f"not valid safe YAML: {problem}", source=source, place=place) from None
-    except (ValueError, TypeError, AttributeError) as exc:  # PyYAML's constructors: a bad date, !!int x, ...
-        raise RuleBaseError(f"not valid safe YAML: {exc}", source=source) from None
 
 
 def _plain(data: Any) -> Any:
-    """``data`` with every :class:`_Map` turned into a plain dict (which YAML can dump again).
+    """``data`` with every :class:`LineDict` turned into a plain dict (which YAML can dump again).
 
     Containers that YAML aliases share stay shared, so nested aliases cannot blow up into
     exponentially many copies (the strict loader already refuses recursive ones).

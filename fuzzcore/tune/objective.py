@@ -66,6 +66,9 @@ class Objective:
         The data, with its distinct input rows.
     nfev : int
         Candidates scored so far (feasible or not).
+    uses_tables : bool
+        Whether candidates are scored from the exact lookup tables (built at the first
+        call), as ``expected_evaluations`` decided.
 
     Notes
     -----
@@ -102,6 +105,10 @@ class Objective:
         self._base_pred = None
         self._fires = None       # (m, n_rules) bool: which rules fire at each distinct row, at the base
         self._users = {}         # {("rule", r) or ("output_term", o, k): rows}, at the base
+
+    @property
+    def uses_tables(self) -> bool:
+        return self._want_tables
 
     def __call__(self, P, base=None) -> np.ndarray:
         """Score candidate rows ``P`` (n_candidates, n_params) -> (n_candidates,).

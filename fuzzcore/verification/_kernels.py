@@ -1,4 +1,4 @@
-"""Numba kernels of the verifier. Private: :mod:`fuzzcore.verify.coverage` calls them with
+"""Numba kernels of the verifier. Private: :mod:`fuzzcore.verification.coverage` calls them with
 validated, packed input; they never raise."""
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Coverage: where in the input box no rule fires, or the strongest rule fires below a threshold.
 
-The box is cut into cells (:mod:`fuzzcore.verify.cells`); the strongest weighted firing
+The box is cut into cells (:mod:`fuzzcore.verification.cells`); the strongest weighted firing
 strength is computed at one representative point per cell, which decides the whole cell:
 
 - threshold 0 ("does any rule fire?"): exact for piecewise-linear terms, whatever the

@@ -12,7 +12,7 @@ For each input and each Mamdani output:
 
 For piecewise-linear terms the minimum and maximum are exact: they are evaluated at every
 breakpoint (and one ulp to each side, for jumps), and at every crossing of two terms'
-linear pieces; smooth terms add a dense sample (:data:`~fuzzcore.verify.cells.SAMPLES`).
+linear pieces; smooth terms add a dense sample (:data:`~fuzzcore.verification.cells.SAMPLES`).
 The integrals are trapezoid sums on the same points.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The verification report: what :func:`fuzzcore.verify.verify` found, as text and as a dict for JSON."""
+"""The verification report: what :func:`fuzzcore.verify` found, as text and as a dict for JSON."""
 from __future__ import annotations
 
 import math
@@ -38,7 +38,7 @@ class OutputRange:
 
 @dataclass(frozen=True)
 class Report:
-    """Everything :func:`~fuzzcore.verify.verify` found about one rule base.
+    """Everything :func:`~fuzzcore.verify` found about one rule base.
 
     ``ok`` is False when some region of the input box fires no rule (or none reaches the
     threshold) or a declared monotonicity fails; :attr:`failures` says which, in words.

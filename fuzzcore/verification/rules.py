@@ -1,7 +1,7 @@
 """Rules worth a second look: never firing, redundant, conflicting, and terms no rule uses.
 
 - **Never firing**: the rule's strength is 0 in every cell of the input box (exact with
-  piecewise-linear terms, :mod:`fuzzcore.verify.coverage`), e.g. a weight of 0 or an
+  piecewise-linear terms, :mod:`fuzzcore.verification.coverage`), e.g. a weight of 0 or an
   antecedent whose terms never overlap.
 - **Redundant**: removing the rule changes no output by more than ``tol`` at any sample,
   and leaves some other rule firing wherever it fires (a rule that alone covers a region is

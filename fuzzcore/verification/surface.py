@@ -1,7 +1,7 @@
 """The output surface: monotonicity along declared inputs, the range reached, the largest slope and jump.
 
 The output of a Mamdani system is not piecewise linear (a centroid of clipped sets), so
-these are searches, not proofs, built on the cell structure (:mod:`fuzzcore.verify.cells`):
+these are searches, not proofs, built on the cell structure (:mod:`fuzzcore.verification.cells`):
 
 - **Lines.** Along each input, lines through every combination of the other inputs' cell
   representatives (a seeded random subset when there are more than the budget allows),

@@ -16,11 +16,11 @@ import io
 import numpy as np
 from tqdm import tqdm
 
+from fuzzcore.outputs import check_output, write_text
 from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
 from monitor.offline.evaluation import feature_rows
 from monitor.offline.run import observe_plans
-from monitor.userfiles import check_output, write_text
 
 FIELDS = ("scene", "frame", "condition", "iou", "rdd", "target")
 

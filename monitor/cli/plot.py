@@ -1,27 +1,32 @@
-"""``fuzzrisk plot RULES -o OUT.png [--monotone rdd:+]``: terms and output surface, problems marked.
+"""``fuzzrisk plot RULES -o OUT.png [--monotone rdd:+] [--overwrite]``: terms and output surface,
+problems marked.
 
 One panel per variable with its terms (the range where no term is positive shaded red),
 then the first output over the first two inputs (any others at the middle of their range):
 regions where no rule fires hatched red (the exact regions of :func:`fuzzcore.verify`), grid
 cells where the output goes against a declared monotonicity outlined in white, and the
 worst violation found drawn as an arrow from its higher to its lower point.
+
+The output is checked before any work (a ``.png`` name in an existing folder, not an
+existing file unless ``--overwrite``) and written whole or not at all
+(:func:`monitor.userfiles.save_figure`).
 """
 from __future__ import annotations
 
 import argparse
-import os
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
 import fuzzcore
+from fuzzcore.outputs import check_output
 from fuzzcore.verification import parse_monotone
+from monitor.userfiles import save_figure
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("rules", metavar="RULES", help="rule base (.yaml or .fis)")
     parser.add_argument("-o", "--output", required=True, metavar="OUT.png", help="where to write the figure")
+    parser.add_argument("--overwrite", action="store_true", help="replace OUT.png if it exists")
     parser.add_argument("--monotone", nargs="+", default=[], metavar="INPUT:+|-",
                         help="declared monotonicity to check and mark, e.g. rdd:+")
     parser.add_argument("--resolution", type=int, default=121,
@@ -91,24 +96,13 @@ def _draw(fis, report, monotone: dict, resolution: int):
 
 
 def run(args: argparse.Namespace) -> int:
-    output = Path(args.output)
-    if output.suffix.lower() != ".png":
-        raise ValueError(f"-o {args.output}: expected a .png file")
-    if not output.parent.is_dir():
-        raise ValueError(f"-o {args.output}: folder {str(output.parent)!r} does not exist")
+    output = check_output(args.output, (".png",), [args.rules], args.overwrite, what="figure")
     if args.resolution < 2:
         raise ValueError(f"--resolution {args.resolution}: expected an integer >= 2")
     fis = fuzzcore.load(args.rules)
     monotone = dict(parse_monotone(spec) for spec in args.monotone)
     report = fuzzcore.verify(fis, monotone)
     fig = _draw(fis, report, monotone, args.resolution)
-    fd, tmp = tempfile.mkstemp(suffix=".png", dir=output.parent)
-    try:
-        with os.fdopen(fd, "wb") as handle:
-            fig.savefig(handle, format="png", dpi=110)
-        os.replace(tmp, output)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    save_figure(fig, output, 110)
     print(f"written to {output} ({'PASS' if report.ok else 'FAIL: ' + '; '.join(report.failures)})")
     return 0

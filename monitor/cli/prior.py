@@ -21,10 +21,10 @@ import argparse
 import numpy as np
 from tqdm import tqdm
 
+from fuzzcore.outputs import check_output
 from monitor.depth.files import KITTI_PNG_SCALE, DepthFolder
 from monitor.cli.scenes import add_parallel_arguments
 from monitor.depth.prior import prior_of_files, save_prior
-from monitor.userfiles import check_output
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

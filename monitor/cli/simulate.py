@@ -24,7 +24,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from monitor.userfiles import check_output_folder, write_text
+from fuzzcore.outputs import check_output_folder, write_text
 
 SWEEP_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 #: (threshold - release, hold_frames) of the sweep's hysteresis settings

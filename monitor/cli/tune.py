@@ -21,7 +21,7 @@ file name only; the SHA-256 identifies the data whatever its path.
 
 The output is checked before any work (a known extension, an existing folder, not one of
 the files read, not an existing file unless ``--overwrite``), and written whole or not at
-all (:func:`fuzzcore.io.write_text_atomic`).
+all (:func:`fuzzcore.outputs.write_text`).
 """
 from __future__ import annotations
 

@@ -20,15 +20,16 @@
     # translation: [1.70, 0.016, 1.51]               # metres
     near: 0.1                   # optional, metres (default 0.1)
 
-Unknown, missing or malformed fields are errors naming the file and the field.
+Unknown, missing, repeated or malformed fields are errors naming the file and the field;
+the file is read as strict safe YAML (:func:`fuzzcore.strict_yaml.load`).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
-import yaml
 
+from fuzzcore import strict_yaml
 from monitor.geometry.camera import Camera
 from monitor.geometry.poses import as_pose, pose_matrix
 
@@ -68,8 +69,8 @@ def load_camera(path: str | Path) -> Camera:
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such camera file")
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        data = strict_yaml.load(path.read_text(encoding="utf-8"))
+    except (strict_yaml.YamlError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: not a readable YAML file: {exc}") from None
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a mapping with fields {', '.join(FIELDS)}, "

@@ -1,15 +1,41 @@
-"""Typed access to JSON objects whose errors name the file and the field path.
+"""JSON files read with errors that name the file, and typed access to their objects whose
+errors name the file and the field path.
 
 Used by the readers of on-disk formats (:mod:`monitor.datasets.scene_folder`,
-:mod:`monitor.datasets.nuscenes`): ``fields.number("yaw")`` returns a float or raises
+:mod:`monitor.datasets.nuscenes`): :func:`load_json` reads a file, and
+``fields.number("yaw")`` returns a float or raises
 ``ValueError("scene.json: frames[3].annotations[2].yaw: 'x' is not a finite number")``.
 """
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
 import numpy as np
+
+
+def load_json(path: Path, what: str):
+    """The JSON value in the file ``path`` (UTF-8); ``what`` names the file in messages.
+
+    Raises
+    ------
+    FileNotFoundError
+        ``path`` is not a file.
+    ValueError
+        Naming the file: not valid JSON, not UTF-8, or nested too deeply to read.
+    """
+    if not path.is_file():
+        raise FileNotFoundError(f"{what} {path} does not exist")
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from exc
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
+    except RecursionError:
+        raise ValueError(f"{path}: JSON nested too deeply to read") from None
 
 
 def _finite(value) -> bool:

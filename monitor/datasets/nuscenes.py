@@ -50,7 +50,6 @@ ego speed and is an error.
 """
 from __future__ import annotations
 
-import json
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -62,7 +61,7 @@ from monitor.geometry.boxes3d import boxes3d_from_quaternions, transform_boxes
 from monitor.geometry.camera import Camera, project_boxes
 from monitor.geometry.poses import invert_pose, pose_matrix
 from monitor.depth.files import DepthFolder
-from monitor.datasets.fields import JsonFields
+from monitor.datasets.fields import JsonFields, load_json
 from monitor.datasets.frames import Frame, FrameRecord
 
 #: nuScenes category name -> detection class (the devkit's ``category_to_detection_name``);
@@ -101,24 +100,10 @@ def category_to_detection_name(category_name: str) -> str | None:
     return DETECTION_MAPPING.get(category_name)
 
 
-def _load_json(path: Path, what: str):
-    if not path.is_file():
-        raise FileNotFoundError(f"{what} {path} does not exist")
-    try:
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from exc
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
-    except RecursionError:
-        raise ValueError(f"{path}: JSON nested too deeply to read") from None
-
-
 def _load_table(folder: Path, name: str) -> dict[str, JsonFields]:
     """A nuScenes table as ``{token: record}``; the file must be a list of objects."""
     path = folder / f"{name}.json"
-    data = _load_json(path, f"nuScenes table {name!r}:")
+    data = load_json(path, f"nuScenes table {name!r}:")
     if not isinstance(data, list):
         raise ValueError(f"{path}: holds a {type(data).__name__}, expected a list of records")
     table: dict[str, JsonFields] = {}
@@ -178,7 +163,7 @@ def read_detection_results(path: Path, samples, *, tokens_file: str = "the table
     them is an error that names ``tokens_file``, where the known tokens come from).
     """
     path = Path(path)
-    data = _load_json(path, "detection results file")
+    data = load_json(path, "detection results file")
     top = JsonFields(data, "results file", path)
     top.get("meta")
     results = top.get("results")

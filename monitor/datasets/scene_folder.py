@@ -36,10 +36,11 @@ from typing import Iterator
 
 import numpy as np
 
-from monitor.datasets.fields import JsonFields
+from fuzzcore.outputs import write_text
+from monitor.datasets.fields import JsonFields, load_json
 from monitor.datasets.frames import MAPS, Frame, Scene
 from monitor.geometry.camera import Camera
-from monitor.userfiles import read_npy, write_npy, write_text
+from monitor.userfiles import read_npy, write_npy
 
 FORMAT = "fuzzrisk-scene"
 VERSION = 1
@@ -175,17 +176,7 @@ class SceneReader:
     def __init__(self, directory: str | Path):
         self.directory = Path(directory)
         path = self.directory / SCENE_FILE
-        if not path.is_file():
-            raise FileNotFoundError(f"scene file {path} does not exist")
-        try:
-            with open(path, encoding="utf-8") as f:
-                data = json.load(f)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from exc
-        except UnicodeDecodeError as exc:
-            raise ValueError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
-        except RecursionError:
-            raise ValueError(f"{path}: JSON nested too deeply to read") from None
+        data = load_json(path, "scene file")
         self._path = path
         top = JsonFields(data, "scene", path)
         if top.get("format") != FORMAT or top.get("version") != VERSION:

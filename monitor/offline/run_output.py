@@ -32,13 +32,13 @@ from pathlib import Path
 
 import numpy as np
 
+from fuzzcore.outputs import write_text
 from monitor.config import ShieldConfig
 from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
 from monitor.risk_monitor import STATUSES
 from monitor.shield import Shield
-from monitor.userfiles import write_text
 
 RUN_FILE = "run.json"
 SUMMARY_FILE = "summary.md"

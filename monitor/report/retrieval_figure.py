@@ -20,8 +20,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Rectangle
 
+from fuzzcore.outputs import write_atomic
 from monitor.depth.retrieval import RetrievalParams, RetrievalStages, Retriever
-from monitor.userfiles import write_atomic
 
 _INVALID_RGB = (0.25, 0.45, 0.85)
 

@@ -192,7 +192,7 @@ def _many_rules(n_rules, **settings):
 
 def test_scratch_is_sized_by_what_the_defuzzifier_needs():
     fis = _many_rules(12_000)  # centroid, max aggregation: 2K = 20 sets, no exact-centroid lists
-    tail = int(fis._iblob[K.N_TAIL])
+    tail = int(fis.packed[1][K.N_TAIL])
     assert tail == 4 * 20 + 101  # the set lists and one aggregated row (compiled.py layout)
     # a 12,000-rule sum-aggregated centroid_exact would keep 12000 * 11999 / 2 = 72 million
     # crossing points (576 MB) per call: refused, naming the cause
@@ -201,7 +201,7 @@ def test_scratch_is_sized_by_what_the_defuzzifier_needs():
     assert f"{MAX_WORK:,}" in str(caught.value) and caught.value.place == "defuzzifier"
     # the same with max aggregation merges sets per output term: fine, and correct
     exact = _many_rules(12_000, defuzzifier="centroid_exact")
-    assert exact._iblob[K.N_TAIL] < 10_000
+    assert exact.packed[1][K.N_TAIL] < 10_000
     y = exact.infer(0.333, 0.5)
     assert 0.0 < y < 1.0
 
@@ -215,7 +215,7 @@ def test_a_large_fis_loads_and_runs_without_a_huge_scratch(tmp_path):
     path = tmp_path / "big.fis"
     path.write_text("\n".join(lines) + "\n")
     fis = fuzzcore.load(path)
-    assert fis._iblob[K.N_TAIL] == 4 * 4 + 101
+    assert fis.packed[1][K.N_TAIL] == 4 * 4 + 101
     # at x = 0.25: 'a' 0.75, 'b' 0.25, thousands of copies of the same two rules (max merges them)
     small = FuzzySystem("small", fis.inputs, fis.outputs, fis.rules[:2])
     assert fis.infer(0.25) == small.infer(0.25)

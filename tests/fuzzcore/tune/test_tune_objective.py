@@ -194,11 +194,11 @@ def test_objective_agrees_with_evaluate_for_rules(fis, data, gap):
     P = np.random.default_rng(2).integers(0, 4, (12, 9)).astype(float)
     P[0] = 0  # every rule off: infeasible
     expected = [np.inf] + [_rmse(space.to_system(p), X, y) for p in P[1:]]
-    direct = Objective(space, X, y)(P)
-    np.testing.assert_allclose(direct, expected, rtol=1e-12)
+    direct = Objective(space, X, y)
+    np.testing.assert_allclose(direct(P), expected, rtol=1e-12)
     tables = Objective(space, X, y, expected_evaluations=10_000)
     np.testing.assert_allclose(tables(P), expected, rtol=1e-12)
-    assert tables._tables is not None  # the exact lookup tables were used
+    assert tables.uses_tables and not direct.uses_tables  # the exact lookup tables were used, and only there
 
 
 def test_objective_with_a_base_point_is_the_full_evaluation_bit_for_bit(fis, data):

@@ -61,7 +61,8 @@ def test_every_shipped_rule_base_fires_a_rule_everywhere(rules, capsys):
     (["check", "rules/fuzzrisk.yaml", "--monotone", "rdd"], "expected INPUT:+ or INPUT:-"),
     (["check", "rules/fuzzrisk.yaml", "--monotone", "speed:+"], "'speed' is not an input"),
     (["check", "rules/none.yaml"], "no such rule base file"),
-    (["plot", "rules/fuzzrisk.yaml", "-o", "out.jpg"], "expected a .png file"),
+    (["plot", "rules/fuzzrisk.yaml", "-o", "out.jpg"], "figure out.jpg: suffix '.jpg', expected .png"),
+    (["plot", "rules/fuzzrisk.yaml", "-o", "no/such/folder/out.png"], "does not exist; create it first"),
 ])
 def test_errors_are_messages(argv, message, capsys):
     assert main(argv) == 2
@@ -74,3 +75,14 @@ def test_plot_writes_a_png(hole, tmp_path, capsys):
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "FAIL: no rule fires on 20 %" in capsys.readouterr().out
     assert [p.name for p in tmp_path.iterdir() if p.suffix == ".png"] == ["hole.png"]  # no temp file left
+
+
+def test_plot_replaces_a_file_only_with_overwrite(hole, tmp_path, capsys):
+    out = tmp_path / "mine.png"
+    out.write_bytes(b"mine")
+    assert main(["plot", str(hole), "-o", str(out)]) == 2
+    assert f"figure {out} already exists; choose another name or allow replacing it (--overwrite)" in \
+        capsys.readouterr().err
+    assert out.read_bytes() == b"mine"
+    assert main(["plot", str(hole), "-o", str(out), "--overwrite"]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -46,6 +46,9 @@ def test_cam_to_ego_file_is_the_same_camera(tmp_path):
      "either cam_to_ego or rotation and translation, not both"),
     (lambda t: t + "near: 0\n", "near = 0, expected a number of metres >= 0.001"),
     (lambda t: "- just a list\n", "expected a mapping with fields width"),
+    # width is line 1 of NUSCENES; the second one is line 6, after the five lines
+    (lambda t: t + "width: 800\n", "not a readable YAML file: line 6: duplicate key 'width' (first at line 1)"),
+    (lambda t: t + "near: !!python/object:os.system x\n", "not a readable YAML file: line 6: not valid safe YAML"),
 ])
 def test_bad_fields_are_named_with_the_file(tmp_path, change, message):
     path = _write(tmp_path, change(NUSCENES))
