@@ -214,14 +214,15 @@ def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
 
 @kernel
 def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
-             centre_y, tan_heading, step, half_width, obstacle, corridor):
-    """Which blocks stand above the road, and which of those are inside the corridor.
+             centre_y, tan_heading, step, half_width, tall_height, obstacle, corridor, tall):
+    """Which blocks stand above the road, which of those are inside the corridor, and
+    which blocks are taller than traffic.
 
     A valid block's height above the plane is ``h = z - (a x + b y + c)``. ``obstacle``
     (flat uint8) gets 1 where ``min_height <= h <= max_height`` and ``d <= max_range``;
     ``corridor`` gets 1 where a block is an obstacle and its lateral offset from the
-    centreline is at most ``half_width``. Returns ``(valid blocks, blocks with h <
-    -below_margin)``.
+    centreline is at most ``half_width``; ``tall`` gets 1 where ``h > tall_height`` (inf:
+    never). Returns ``(valid blocks, blocks with h < -below_margin)``.
     """
     n_valid = 0
     n_below = 0
@@ -229,12 +230,14 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
         d = ds[k]
         obstacle[k] = 0
         corridor[k] = 0
+        tall[k] = 0
         if not d > 0.0:
             continue
         n_valid += 1
         x, y = xs[k], ys[k]
         h = zs[k] - (a * x + b * y + c)
         n_below += h < -below_margin
+        tall[k] = h > tall_height
         if h >= min_height and h <= max_height and d <= max_range:
             obstacle[k] = 1
             corridor[k] = _lateral(x, y, centre_y, tan_heading, step) <= half_width
@@ -311,19 +314,53 @@ def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
 
 
 @kernel
-def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
-    """Per component: its extent, sizes, nearest corridor point and a robust depth.
+def tall_components(xs, ys, tall, x0, y0, cell, parent, ids, n, out):
+    """Which components of :func:`label_objects` have a tall block above one of their cells.
+
+    ``parent`` and ``ids`` are the grid scratch :func:`label_objects` left (the union-find
+    forest of occupied cells, -1 for free ones, and each root's component). A block with
+    ``tall`` set whose ground position (``xs, ys``) falls in an occupied cell marks that
+    cell's component; blocks off the grid mark nothing. ``out`` uint8 (n,) gets 1 for the
+    marked components, 0 for the others.
+    """
+    rows, cols = tall.shape
+    nx, ny = parent.shape
+    flat = parent.ravel()
+    ids_flat = ids.ravel()
+    for m in range(n):
+        out[m] = 0
+    for r in range(rows):
+        for col in range(cols):
+            if not tall[r, col]:
+                continue
+            fi = math.floor((xs[r, col] - x0) / cell)
+            fj = math.floor((ys[r, col] - y0) / cell)
+            if not (0 <= fi < nx and 0 <= fj < ny):
+                continue
+            k = int(fi) * ny + int(fj)
+            if flat[k] < 0:
+                continue
+            m = ids_flat[_find(flat, k)]
+            if m >= 0:
+                out[m] = 1
+
+
+@kernel
+def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile):
+    """Per component: its extent, sizes, nearest corridor point, a robust depth and its
+    footprint on the ground.
 
     ``labels`` int32 (rows, cols) from :func:`label_objects` with ``n`` components;
-    ``corridor`` uint8, ``ds`` and ``xs`` float32 (rows, cols). Returns float64 (n, 8) rows
-    ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth``: the first and last
-    block row and column, the number of blocks and of those inside the corridor, the
-    smallest ego x of those (inf if none), and, for components with at least
-    ``min_points`` blocks inside the corridor, the ``percentile`` (0..100, linear
-    interpolation as numpy's default) of the blocks' depths; NaN for the others.
+    ``corridor`` uint8, ``ds``, ``xs`` and ``ys`` float32 (rows, cols). Returns float64
+    (n, 12) rows ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth, x0, x1,
+    y0, y1``: the first and last block row and column, the number of blocks and of those
+    inside the corridor, the smallest ego x of those (inf if none), for components with at
+    least ``min_points`` blocks inside the corridor the ``percentile`` (0..100, linear
+    interpolation as numpy's default) of the blocks' depths (NaN for the others), and the
+    smallest and largest ego x and y of all its blocks.
     """
     rows, cols = ds.shape
-    stats = np.empty((n, 8))
+    stats = np.empty((n, 12))
     for m in range(n):
         stats[m, 0] = rows
         stats[m, 1] = -1.0
@@ -333,6 +370,10 @@ def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
         stats[m, 5] = 0.0
         stats[m, 6] = np.inf
         stats[m, 7] = np.nan
+        stats[m, 8] = np.inf
+        stats[m, 9] = -np.inf
+        stats[m, 10] = np.inf
+        stats[m, 11] = -np.inf
     for r in range(rows):
         for col in range(cols):
             m = labels[r, col]
@@ -343,6 +384,11 @@ def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
             stats[m, 2] = min(stats[m, 2], col)
             stats[m, 3] = max(stats[m, 3], col)
             stats[m, 4] += 1.0
+            x, y = float(xs[r, col]), float(ys[r, col])
+            stats[m, 8] = min(stats[m, 8], x)
+            stats[m, 9] = max(stats[m, 9], x)
+            stats[m, 10] = min(stats[m, 10], y)
+            stats[m, 11] = max(stats[m, 11], y)
             if corridor[r, col]:
                 stats[m, 5] += 1.0
                 stats[m, 6] = min(stats[m, 6], float(xs[r, col]))

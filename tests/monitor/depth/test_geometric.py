@@ -90,6 +90,46 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     assert view.boxes[0, 4] < view.boxes[1, 4]
 
 
+# a street's structure and its traffic beside the lane, for a corridor wide enough to hold both
+BUILDING = [15.0, 6.5, 4.0, 0.4, 30.0, 8.0, 0.0]            # 8 m frontage, left
+TALL_POLE = [12.0, -5.5, 3.0, 0.2, 0.2, 6.0, 0.0]           # 6 m pole on the right sidewalk
+FENCE = [15.0, 5.0, 0.75, 0.1, 20.0, 1.5, 0.0]              # 1.5 m high, 0.1 m thin, before it
+PARKED_CAR = [12.0, -4.5, 0.865, 1.95, 4.6, 1.73, 0.0]      # on the right shoulder
+WIDE = dict(corridor_half_width=8.0)
+STRUCTURE_RULES = dict(structure_height=3.5, long_length=6.0, thin_width=1.0)
+
+
+def test_structure_rules_drop_building_pole_and_fence_and_keep_the_traffic():
+    boxes = [CAR_AHEAD, PEDESTRIAN, PARKED_CAR, BUILDING, TALL_POLE, FENCE]
+    depth, labels = _render(boxes)
+    truths = [_truth(labels, depth, k) for k in range(len(boxes))]
+
+    def inside(box, truth):
+        """Share of ``box``'s area inside ``truth`` (the band's part of a tall thing is small)."""
+        w = min(box[0] + box[2] / 2, truth[0] + truth[2] / 2) - max(box[0] - box[2] / 2, truth[0] - truth[2] / 2)
+        h = min(box[1] + box[3] / 2, truth[1] + truth[3] / 2) - max(box[1] - box[3] / 2, truth[1] - truth[3] / 2)
+        return max(w, 0.0) * max(h, 0.0) / (box[2] * box[3])
+
+    def found(params):
+        view = GeometricRetriever(CAMERA, GeometricParams(**params)).view(depth)
+        return [k for k in range(len(boxes)) if any(inside(b, truths[k]) > 0.8 for b in view.boxes)]
+
+    # the wide corridor alone takes the structure in with the traffic
+    assert found(WIDE) == [0, 1, 2, 3, 4, 5]
+    # the building (blocks above 3.5 m over its cells) and the pole (the same) are tall, the
+    # fence is 0.1 m across and more than 6 m long (about 9.7 to 21 m ahead within range)
+    assert found({**WIDE, **STRUCTURE_RULES}) == [0, 1, 2]
+    # each rule alone: the tall rule drops the building and the pole, the thin-and-long one
+    assert found({**WIDE, "structure_height": 3.5}) == [0, 1, 2, 5]
+    # (the building's face seen from the road is as thin and long as the fence)
+    assert found({**WIDE, "long_length": 6.0, "thin_width": 1.0}) == [0, 1, 2, 4]
+    # the kept objects are the same boxes with or without the rules
+    plain = GeometricRetriever(CAMERA, GeometricParams(**WIDE)).view(depth).boxes
+    ruled = GeometricRetriever(CAMERA, GeometricParams(**WIDE, **STRUCTURE_RULES)).view(depth).boxes
+    for k in (0, 1, 2):
+        np.testing.assert_array_equal(_match(plain, truths[k])[0], _match(ruled, truths[k])[0])
+
+
 def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
     depth, _ = _render([WALL, POLE])
     view = GeometricRetriever(CAMERA).view(depth)
@@ -321,10 +361,10 @@ def test_classify_equals_numpy():
     x, y, z, d = _cloud(3)
     corridor = Corridor(1.75, curvature=0.02)
     centre, tan = corridor.table(40.0, CORRIDOR_STEP_M)
-    obstacle, inside = np.empty(x.size, np.uint8), np.empty(x.size, np.uint8)
+    obstacle, inside, tall = (np.empty(x.size, np.uint8) for _ in range(3))
     plane = (0.02, -0.01, 0.1)
     n_valid, n_below = kernels.classify(x, y, z, d, *plane, 0.2, 2.5, 20.0, 0.05, centre, tan,
-                                        CORRIDOR_STEP_M, 1.75, obstacle, inside)
+                                        CORRIDOR_STEP_M, 1.75, 1.0, obstacle, inside, tall)
     x64, y64, z64, d64 = (a.astype(np.float64) for a in (x, y, z, d))
     h = z64 - (0.02 * x64 - 0.01 * y64 + 0.1)
     valid = d64 > 0
@@ -334,6 +374,8 @@ def test_classify_equals_numpy():
     lateral = np.abs(y64 - centre[row] - tan[row] * (x64 - tangent_x)) / np.hypot(1.0, tan[row])
     np.testing.assert_array_equal(obstacle, expected)
     np.testing.assert_array_equal(inside, expected & (lateral <= 1.75))
+    np.testing.assert_array_equal(tall, valid & (h > 1.0))
+    assert 0 < tall.sum() < valid.sum()
     assert n_valid == valid.sum() and n_below == (valid & (h < -0.05)).sum()
     assert 0 < inside.sum() < expected.sum()
 
@@ -388,17 +430,22 @@ def test_object_stats_equals_numpy():
     labels[labels == 4] = -1  # component 4 has no block
     ds = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
     xs = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
+    ys = rng.uniform(-8.0, 8.0, (20, 30)).astype(np.float32)
     corridor = (rng.random((20, 30)) < 0.1).astype(np.uint8) * (labels >= 0)
     corridor[labels == 5] = 0  # component 5 lies outside the corridor
-    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, 3, 5.0)
+    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, ys, 3, 5.0)
     for m in range(6):
         rows, cols = np.nonzero(labels == m)
         inside = (labels == m) & (corridor > 0)
         if m == 4:
             assert stats[m, 4] == 0 and np.isnan(stats[m, 7])
+            np.testing.assert_array_equal(stats[m, 8:], [np.inf, -np.inf, np.inf, -np.inf])
             continue
         np.testing.assert_array_equal(stats[m, :6], [rows.min(), rows.max(), cols.min(), cols.max(),
                                                      rows.size, inside.sum()])
+        mine = labels == m
+        np.testing.assert_array_equal(stats[m, 8:], [xs[mine].min(), xs[mine].max(), ys[mine].min(),
+                                                     ys[mine].max()])
         assert stats[m, 6] == (xs[inside].min() if inside.any() else np.inf)
         if inside.sum() >= 3:
             assert stats[m, 7] == pytest.approx(np.percentile(ds[labels == m].astype(np.float64), 5.0),
@@ -420,6 +467,9 @@ def test_object_stats_equals_numpy():
     ("max_tilt_deg", 50.0, "max_tilt_deg = 50.0"),
     ("max_invalid_fraction", 1.5, r"max_invalid_fraction = 1.5, must be a share in \[0, 1\]"),
     ("seed", -1, "seed = -1"),
+    ("structure_height", 2.0, "structure_height must be above max_height"),
+    ("structure_height", -1.0, r"structure_height = -1.0, must be a finite number of metres > 0 or None"),
+    ("long_length", 6.0, "give both"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
