@@ -314,53 +314,55 @@ def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
 
 
 @kernel
-def tall_components(xs, ys, tall, x0, y0, cell, parent, ids, n, out):
-    """Which components of :func:`label_objects` have a tall block above one of their cells.
+def clear_structure(xs, ys, tall, x0, y0, cell, marks, obstacle, corridor):
+    """Take the obstacle blocks standing where something tall rises from the ground.
 
-    ``parent`` and ``ids`` are the grid scratch :func:`label_objects` left (the union-find
-    forest of occupied cells, -1 for free ones, and each root's component). A block with
-    ``tall`` set whose ground position (``xs, ys``) falls in an occupied cell marks that
-    cell's component; blocks off the grid mark nothing. ``out`` uint8 (n,) gets 1 for the
-    marked components, 0 for the others.
+    A block with ``tall`` set marks the cell of its ground position (``xs, ys``) on the
+    (nx, ny) grid of :func:`label_objects`, and the cell's 8 neighbours (the scatter of a
+    depth estimate's error; ``marks`` int32 scratch; blocks off the grid mark nothing).
+    Every obstacle block in a marked cell is cleared from ``obstacle`` and ``corridor``
+    (uint8, like ``tall`` (rows, cols)). Returns the number cleared.
     """
     rows, cols = tall.shape
-    nx, ny = parent.shape
-    flat = parent.ravel()
-    ids_flat = ids.ravel()
-    for m in range(n):
-        out[m] = 0
+    nx, ny = marks.shape
+    flat = marks.ravel()
+    flat[:] = 0
     for r in range(rows):
         for col in range(cols):
-            if not tall[r, col]:
-                continue
-            fi = math.floor((xs[r, col] - x0) / cell)
-            fj = math.floor((ys[r, col] - y0) / cell)
-            if not (0 <= fi < nx and 0 <= fj < ny):
-                continue
-            k = int(fi) * ny + int(fj)
-            if flat[k] < 0:
-                continue
-            m = ids_flat[_find(flat, k)]
-            if m >= 0:
-                out[m] = 1
+            if tall[r, col]:
+                fi = math.floor((xs[r, col] - x0) / cell)
+                fj = math.floor((ys[r, col] - y0) / cell)
+                if 0 <= fi < nx and 0 <= fj < ny:  # the cell and its 8 neighbours
+                    for i in range(max(int(fi) - 1, 0), min(int(fi) + 2, nx)):
+                        for j in range(max(int(fj) - 1, 0), min(int(fj) + 2, ny)):
+                            flat[i * ny + j] = 1
+    n = 0
+    for r in range(rows):
+        for col in range(cols):
+            if obstacle[r, col]:
+                fi = math.floor((xs[r, col] - x0) / cell)
+                fj = math.floor((ys[r, col] - y0) / cell)
+                if 0 <= fi < nx and 0 <= fj < ny and flat[int(fi) * ny + int(fj)]:
+                    obstacle[r, col] = 0
+                    corridor[r, col] = 0
+                    n += 1
+    return n
 
 
 @kernel
-def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile):
-    """Per component: its extent, sizes, nearest corridor point, a robust depth and its
-    footprint on the ground.
+def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
+    """Per component: its extent, sizes, nearest corridor point and a robust depth.
 
     ``labels`` int32 (rows, cols) from :func:`label_objects` with ``n`` components;
-    ``corridor`` uint8, ``ds``, ``xs`` and ``ys`` float32 (rows, cols). Returns float64
-    (n, 12) rows ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth, x0, x1,
-    y0, y1``: the first and last block row and column, the number of blocks and of those
-    inside the corridor, the smallest ego x of those (inf if none), for components with at
-    least ``min_points`` blocks inside the corridor the ``percentile`` (0..100, linear
-    interpolation as numpy's default) of the blocks' depths (NaN for the others), and the
-    smallest and largest ego x and y of all its blocks.
+    ``corridor`` uint8, ``ds`` and ``xs`` float32 (rows, cols). Returns float64 (n, 8) rows
+    ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth``: the first and last
+    block row and column, the number of blocks and of those inside the corridor, the
+    smallest ego x of those (inf if none), and, for components with at least
+    ``min_points`` blocks inside the corridor, the ``percentile`` (0..100, linear
+    interpolation as numpy's default) of the blocks' depths; NaN for the others.
     """
     rows, cols = ds.shape
-    stats = np.empty((n, 12))
+    stats = np.empty((n, 8))
     for m in range(n):
         stats[m, 0] = rows
         stats[m, 1] = -1.0
@@ -370,10 +372,6 @@ def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile):
         stats[m, 5] = 0.0
         stats[m, 6] = np.inf
         stats[m, 7] = np.nan
-        stats[m, 8] = np.inf
-        stats[m, 9] = -np.inf
-        stats[m, 10] = np.inf
-        stats[m, 11] = -np.inf
     for r in range(rows):
         for col in range(cols):
             m = labels[r, col]
@@ -384,11 +382,6 @@ def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile):
             stats[m, 2] = min(stats[m, 2], col)
             stats[m, 3] = max(stats[m, 3], col)
             stats[m, 4] += 1.0
-            x, y = float(xs[r, col]), float(ys[r, col])
-            stats[m, 8] = min(stats[m, 8], x)
-            stats[m, 9] = max(stats[m, 9], x)
-            stats[m, 10] = min(stats[m, 10], y)
-            stats[m, 11] = max(stats[m, 11], y)
             if corridor[r, col]:
                 stats[m, 5] += 1.0
                 stats[m, 6] = min(stats[m, 6], float(xs[r, col]))

@@ -37,14 +37,13 @@ in the manner of the stereo-vision obstacle detectors:
    its whole box. Each object's 2D box is the extent of its blocks in pixels and its depth
    the ``depth_percentile`` of its blocks' camera depths, comparable with the detector's
    ``camera_depth`` (the nearest camera depth of a box).
-5. **Structure.** A corridor wide enough to hold the traffic beside the car (parked cars,
-   cyclists, pedestrians at the kerb) also reaches the street's structure, which is not
-   traffic and which no detector is asked to find. Two shape rules, on what road users
-   share and structure does not, drop it: an object above whose ground cells some block
-   rises higher than ``structure_height`` above the road (walls, buildings, poles, trees:
-   taller than any road vehicle), and an object longer than ``long_length`` along the ego
-   x axis and narrower than ``thin_width`` across it (fences, hedges, a kerb's edge: thin
-   and long along the road). Either rule is off when its parameter is None.
+   Before the grouping, structure is taken out: a corridor wide enough to hold the traffic
+   beside the car (parked cars, cyclists, pedestrians at the kerb) also reaches the
+   street's structure, which is not traffic and which no detector is asked to find. What
+   rises higher than ``structure_height`` above the road (buildings, walls, poles, trees:
+   taller than any road vehicle) marks its ground cell and the cell's neighbours, and the
+   obstacle blocks in marked cells are no obstacles. It works per cell, not per object, so
+   a car parked against a wall keeps its own cells (off when ``structure_height`` is None).
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -175,11 +174,9 @@ class GeometricParams:
     seed : int
         Seed (>= 0) of the RANSAC's random triples (the same every frame).
     structure_height : float or None
-        Metres above the road (> ``max_height``): an object with a block this high above
-        one of its ground cells is structure, not traffic (None: the rule is off).
-    long_length, thin_width : float or None
-        Metres > 0: an object whose blocks span more than ``long_length`` along the ego x
-        axis and less than ``thin_width`` across it is structure (None: the rule is off).
+        Metres above the road (> ``max_height``): the ground cells under a block this high,
+        and their neighbours, hold structure, not traffic (None: the rule is off). Road
+        vehicles stay under 4.0 m in the EU, 4.1-4.3 m in North America.
     """
 
     stride: int = 4
@@ -205,8 +202,6 @@ class GeometricParams:
     max_corridor_invalid_fraction: float = 0.5
     seed: int = 0
     structure_height: float | None = None
-    long_length: float | None = None
-    thin_width: float | None = None
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
@@ -227,17 +222,14 @@ class GeometricParams:
         if not self.min_height < self.max_height:
             raise ValueError(f"min_height = {self.min_height} and max_height = {self.max_height}: "
                              "min_height must be below max_height (metres above the road)")
-        for name in ("structure_height", "long_length", "thin_width"):
-            value = getattr(self, name)
-            if value is not None and not (isinstance(value, (int, float)) and not isinstance(value, bool)
-                                          and math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} = {value!r}, must be a finite number of metres > 0 or None (off)")
-        if self.structure_height is not None and not self.structure_height > self.max_height:
-            raise ValueError(f"structure_height = {self.structure_height} and max_height = {self.max_height}: "
+        height = self.structure_height
+        if height is not None and not (isinstance(height, (int, float)) and not isinstance(height, bool)
+                                       and math.isfinite(height) and height > 0):
+            raise ValueError(f"structure_height = {height!r}, must be a finite number of metres > 0 "
+                             "or None (off)")
+        if height is not None and not height > self.max_height:
+            raise ValueError(f"structure_height = {height} and max_height = {self.max_height}: "
                              "structure_height must be above max_height (metres above the road)")
-        if (self.long_length is None) != (self.thin_width is None):
-            raise ValueError(f"long_length = {self.long_length!r} and thin_width = {self.thin_width!r}: "
-                             "give both (the thin-and-long rule) or neither")
         if not 0 <= self.depth_percentile <= 100:
             raise ValueError(f"depth_percentile = {self.depth_percentile!r}, must be in [0, 100]")
         if not 0 <= self.max_tilt_deg < 45:
@@ -432,24 +424,20 @@ class GeometricRetriever:
         if below > params.max_below_fraction:
             raise BlindViewError("below_ground", below, params.max_below_fraction)
 
+        if params.structure_height is not None:
+            kernels.clear_structure(xs, ys, scratch.tall, *self._grid_origin, params.cell_size,
+                                    scratch.grid, scratch.obstacle, scratch.corridor)
         n = kernels.label_objects(xs, ys, scratch.obstacle, *self._grid_origin, params.cell_size,
                                   scratch.grid, scratch.grid_ids, scratch.labels)
-        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, ys, params.min_points,
+        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, params.min_points,
                                      params.depth_percentile)
-        structure = np.zeros(n, dtype=np.uint8)
-        if params.structure_height is not None:
-            kernels.tall_components(xs, ys, scratch.tall, *self._grid_origin, params.cell_size,
-                                    scratch.grid, scratch.grid_ids, n, structure)
-        if params.long_length is not None:
-            structure |= (stats[:, 9] - stats[:, 8] > params.long_length) \
-                & (stats[:, 11] - stats[:, 10] < params.thin_width)
         s = params.stride
         x0, y0 = stats[:, 2] * s, stats[:, 0] * s
         x1 = np.minimum((stats[:, 3] + 1) * s, cam.width)
         y1 = np.minimum((stats[:, 1] + 1) * s, cam.height)
         boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
         keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
-            & (boxes[:, 3] >= params.min_size) & (structure == 0)
+            & (boxes[:, 3] >= params.min_size)
         boxes = boxes[keep]
         return GeometricView(
             boxes=boxes[np.argsort(boxes[:, 4], kind="stable")],

@@ -91,43 +91,45 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
 
 
 # a street's structure and its traffic beside the lane, for a corridor wide enough to hold both
-BUILDING = [15.0, 6.5, 4.0, 0.4, 30.0, 8.0, 0.0]            # 8 m frontage, left
+BUILDING = [15.0, 6.5, 4.0, 0.4, 30.0, 8.0, 0.0]            # 8 m frontage, left: face at y = 6.3
 TALL_POLE = [12.0, -5.5, 3.0, 0.2, 0.2, 6.0, 0.0]           # 6 m pole on the right sidewalk
-FENCE = [15.0, 5.0, 0.75, 0.1, 20.0, 1.5, 0.0]              # 1.5 m high, 0.1 m thin, before it
 PARKED_CAR = [12.0, -4.5, 0.865, 1.95, 4.6, 1.73, 0.0]      # on the right shoulder
+CAR_BY_WALL = [18.0, 4.9, 0.865, 1.95, 4.6, 1.73, 0.0]      # left side at y = 5.875, 0.425 m off the face
 WIDE = dict(corridor_half_width=8.0)
-STRUCTURE_RULES = dict(structure_height=3.5, long_length=6.0, thin_width=1.0)
 
 
-def test_structure_rules_drop_building_pole_and_fence_and_keep_the_traffic():
-    boxes = [CAR_AHEAD, PEDESTRIAN, PARKED_CAR, BUILDING, TALL_POLE, FENCE]
+def _inside(box, truth):
+    """Share of ``box``'s area inside ``truth`` (a tall thing's band part is a small box in it)."""
+    w = min(box[0] + box[2] / 2, truth[0] + truth[2] / 2) - max(box[0] - box[2] / 2, truth[0] - truth[2] / 2)
+    h = min(box[1] + box[3] / 2, truth[1] + truth[3] / 2) - max(box[1] - box[3] / 2, truth[1] - truth[3] / 2)
+    return max(w, 0.0) * max(h, 0.0) / (box[2] * box[3])
+
+
+def test_what_rises_above_structure_height_is_taken_out_and_the_traffic_beside_it_kept():
+    boxes = [CAR_AHEAD, PEDESTRIAN, PARKED_CAR, CAR_BY_WALL, BUILDING, TALL_POLE]
     depth, labels = _render(boxes)
     truths = [_truth(labels, depth, k) for k in range(len(boxes))]
 
-    def inside(box, truth):
-        """Share of ``box``'s area inside ``truth`` (the band's part of a tall thing is small)."""
-        w = min(box[0] + box[2] / 2, truth[0] + truth[2] / 2) - max(box[0] - box[2] / 2, truth[0] - truth[2] / 2)
-        h = min(box[1] + box[3] / 2, truth[1] + truth[3] / 2) - max(box[1] - box[3] / 2, truth[1] - truth[3] / 2)
-        return max(w, 0.0) * max(h, 0.0) / (box[2] * box[3])
+    def view(**params):
+        return GeometricRetriever(CAMERA, GeometricParams(**WIDE, **params)).view(depth).boxes
 
-    def found(params):
-        view = GeometricRetriever(CAMERA, GeometricParams(**params)).view(depth)
-        return [k for k in range(len(boxes)) if any(inside(b, truths[k]) > 0.8 for b in view.boxes)]
+    def found(S):
+        return [k for k in range(len(boxes)) if any(_inside(b, truths[k]) > 0.8 for b in S)]
 
-    # the wide corridor alone takes the structure in with the traffic
-    assert found(WIDE) == [0, 1, 2, 3, 4, 5]
-    # the building (blocks above 3.5 m over its cells) and the pole (the same) are tall, the
-    # fence is 0.1 m across and more than 6 m long (about 9.7 to 21 m ahead within range)
-    assert found({**WIDE, **STRUCTURE_RULES}) == [0, 1, 2]
-    # each rule alone: the tall rule drops the building and the pole, the thin-and-long one
-    assert found({**WIDE, "structure_height": 3.5}) == [0, 1, 2, 5]
-    # (the building's face seen from the road is as thin and long as the fence)
-    assert found({**WIDE, "long_length": 6.0, "thin_width": 1.0}) == [0, 1, 2, 4]
-    # the kept objects are the same boxes with or without the rules
-    plain = GeometricRetriever(CAMERA, GeometricParams(**WIDE)).view(depth).boxes
-    ruled = GeometricRetriever(CAMERA, GeometricParams(**WIDE, **STRUCTURE_RULES)).view(depth).boxes
-    for k in (0, 1, 2):
-        np.testing.assert_array_equal(_match(plain, truths[k])[0], _match(ruled, truths[k])[0])
+    plain, ruled = view(), view(structure_height=3.5)
+    # the wide corridor alone takes the structure in with the traffic, and the car by the
+    # wall is part of the building's object (one cell apart on the ground)
+    assert found(plain) == [0, 1, 2, 4, 5]
+    # the building and the pole rise above 3.5 m: their cells go; four objects are left, one
+    # per road user, the car by the wall included (its cells are its own), with their boxes
+    assert len(ruled) == 4
+    for k in (0, 1, 2, 3):
+        found_box, score = _match(ruled, truths[k])
+        assert score > 0.75 and found_box[4] == pytest.approx(truths[k][4], rel=0.01)
+    # a truck 4 m tall ahead stays traffic under the default-like 4.2 m
+    truck = [16.0, 0.0, 2.0, 2.5, 10.0, 4.0, 0.0]
+    depth_truck, _ = _render([truck])
+    assert GeometricRetriever(CAMERA, GeometricParams(structure_height=4.2))(depth_truck).shape == (1, 5)
 
 
 def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
@@ -424,28 +426,45 @@ def test_label_objects_equals_scipy_on_the_occupancy_grid():
     np.testing.assert_array_equal(labels, expected)
 
 
+def test_clear_structure_equals_numpy():
+    rng = np.random.default_rng(9)
+    xs = rng.uniform(0.0, 12.0, (30, 40)).astype(np.float32)
+    ys = rng.uniform(-6.0, 6.0, (30, 40)).astype(np.float32)
+    tall = (rng.random((30, 40)) < 0.02).astype(np.uint8)
+    tall[0, 0], xs[0, 0] = 1, 50.0  # off the grid: marks nothing
+    obstacle = (rng.random((30, 40)) < 0.3).astype(np.uint8)
+    corridor = obstacle * (rng.random((30, 40)) < 0.5).astype(np.uint8)
+    shape = (40, 40)
+    gi, gj = np.floor(xs / 0.3).astype(int), np.floor((ys + 6.0) / 0.3).astype(int)
+    on = (gi >= 0) & (gi < shape[0]) & (gj >= 0) & (gj < shape[1])
+    marked = np.zeros(shape, bool)
+    marked[gi[(tall > 0) & on], gj[(tall > 0) & on]] = True
+    marked = ndimage.binary_dilation(marked, structure=np.ones((3, 3)))
+    cleared = (obstacle > 0) & on & marked[np.clip(gi, 0, 39), np.clip(gj, 0, 39)]
+    expected_obstacle, expected_corridor = obstacle * ~cleared, corridor * ~cleared
+    n = kernels.clear_structure(xs, ys, tall, 0.0, -6.0, 0.3, np.empty(shape, np.int32), obstacle, corridor)
+    assert n == cleared.sum() > 20
+    np.testing.assert_array_equal(obstacle, expected_obstacle)
+    np.testing.assert_array_equal(corridor, expected_corridor)
+
+
 def test_object_stats_equals_numpy():
     rng = np.random.default_rng(8)
     labels = rng.integers(-1, 6, (20, 30)).astype(np.int32)
     labels[labels == 4] = -1  # component 4 has no block
     ds = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
     xs = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
-    ys = rng.uniform(-8.0, 8.0, (20, 30)).astype(np.float32)
     corridor = (rng.random((20, 30)) < 0.1).astype(np.uint8) * (labels >= 0)
     corridor[labels == 5] = 0  # component 5 lies outside the corridor
-    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, ys, 3, 5.0)
+    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, 3, 5.0)
     for m in range(6):
         rows, cols = np.nonzero(labels == m)
         inside = (labels == m) & (corridor > 0)
         if m == 4:
             assert stats[m, 4] == 0 and np.isnan(stats[m, 7])
-            np.testing.assert_array_equal(stats[m, 8:], [np.inf, -np.inf, np.inf, -np.inf])
             continue
         np.testing.assert_array_equal(stats[m, :6], [rows.min(), rows.max(), cols.min(), cols.max(),
                                                      rows.size, inside.sum()])
-        mine = labels == m
-        np.testing.assert_array_equal(stats[m, 8:], [xs[mine].min(), xs[mine].max(), ys[mine].min(),
-                                                     ys[mine].max()])
         assert stats[m, 6] == (xs[inside].min() if inside.any() else np.inf)
         if inside.sum() >= 3:
             assert stats[m, 7] == pytest.approx(np.percentile(ds[labels == m].astype(np.float64), 5.0),
@@ -469,7 +488,6 @@ def test_object_stats_equals_numpy():
     ("seed", -1, "seed = -1"),
     ("structure_height", 2.0, "structure_height must be above max_height"),
     ("structure_height", -1.0, r"structure_height = -1.0, must be a finite number of metres > 0 or None"),
-    ("long_length", 6.0, "give both"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
