@@ -326,7 +326,8 @@ class RiskMonitor:
         P = self._project(boxes)
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
-        alignment = align(S, P, self.config.alignment.alpha, self.config.alignment.beta)
+        chosen = self.config.alignment
+        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:

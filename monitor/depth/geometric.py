@@ -131,8 +131,9 @@ class GeometricParams:
         (0 <= min_height < max_height): below is road, kerb or debris too low to matter,
         above is what the car passes under.
     corridor_half_width : float
-        Half width of the default straight corridor, metres > 0 (the nuScenes car's half
-        width, 0.95 m, plus a 0.8 m margin: half a 3.5 m lane).
+        Half width of the default straight corridor, metres > 0: the ego lane (3.5 m) and
+        half of each neighbour, where the traffic that the target 1 - USC~ counts is (1.75 m,
+        the car's half width plus a margin, is the ego lane alone: half the recall).
     max_range : float
         Farthest camera depth of an obstacle block and of the corridor's road that must be
         seen, metres, finite > 0 (the paper's 20 m).
@@ -183,7 +184,7 @@ class GeometricParams:
     edge_spread: float = 0.15
     min_height: float = 0.2
     max_height: float = 2.5
-    corridor_half_width: float = 1.75
+    corridor_half_width: float = 3.5
     max_range: float = DEFAULT_RANGE_M
     cell_size: float = 0.3
     depth_percentile: float = 5.0
@@ -201,7 +202,7 @@ class GeometricParams:
     max_invalid_fraction: float = 0.5
     max_corridor_invalid_fraction: float = 0.5
     seed: int = 0
-    structure_height: float | None = None
+    structure_height: float | None = 4.2
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),

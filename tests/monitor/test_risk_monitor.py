@@ -23,6 +23,8 @@ from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
 CAMERA = Camera.nuscenes_front()
+#: the paper's depth view (the default is the geometric one: its tests are below)
+PAPER = replace(MonitorConfig(), retrieval=RetrievalConfig(method="paper"))
 #: a depth network reports far things (the sky) at its largest depth, not as invalid
 FAR_M = 80.0
 # a pedestrian 9 m ahead, slightly left: x, y, z (centre), w, l, h, yaw (ego frame)
@@ -47,7 +49,7 @@ def _depth(boxes):
 
 @pytest.fixture(scope="module")
 def monitor(fis, prior):
-    return RiskMonitor(fis, prior, CAMERA)
+    return RiskMonitor(fis, prior, CAMERA, PAPER)
 
 
 @pytest.fixture(scope="module")
@@ -186,8 +188,8 @@ _SMALL = Camera(CAMERA.K * np.array([[0.1], [0.1], [1.0]]), 160, 90, CAMERA.cam_
 def small_monitor(fis):
     depth = render_depth(_SMALL, np.zeros((0, 7))).depth
     prior = (1.0 / np.where(np.isfinite(depth), depth, FAR_M)).astype(np.float32)
-    retrieval = MonitorConfig().retrieval
-    return RiskMonitor(fis, prior, _SMALL, replace(MonitorConfig(), retrieval=replace(
+    retrieval = PAPER.retrieval
+    return RiskMonitor(fis, prior, _SMALL, replace(PAPER, retrieval=replace(
         retrieval, paper=replace(retrieval.paper, min_size=4.0))))
 
 
@@ -292,7 +294,7 @@ def test_the_first_step_after_construction_compiles_nothing(mode, method):
 
 
 def test_fail_safe_is_configurable(fis, prior):
-    config = replace(MonitorConfig(), risk=RiskConfig(fail_safe=0.9))
+    config = replace(PAPER, risk=RiskConfig(fail_safe=0.9))
     report = RiskMonitor(fis, prior, CAMERA, config).step(np.zeros((900, 1600), np.float32), np.zeros((0, 7)))
     assert report.status == INVALID_INPUT and report.risk == 0.9
 

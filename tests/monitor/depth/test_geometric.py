@@ -31,6 +31,8 @@ PEDESTRIAN = [9.0, -1.0, 0.885, 0.67, 0.73, 1.77, 0.0]      # in the corridor's 
 WALL = [15.0, 6.5, 2.0, 0.4, 30.0, 4.0, 0.0]                # beside the road, left
 POLE = [8.0, -5.5, 2.0, 0.2, 0.2, 4.0, 0.0]                 # on the sidewalk, right
 CAR_NEXT_LANE = [14.0, -3.5, 0.865, 1.95, 4.6, 1.73, 0.0]   # the lane to the right
+#: the ego lane alone (the default corridor, 3.5 m either side, holds half of each neighbour)
+EGO_LANE = GeometricParams(corridor_half_width=1.75)
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -74,7 +76,7 @@ def _pitched(camera, degrees):
 def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     boxes = [CAR_AHEAD, PEDESTRIAN, WALL, POLE, CAR_NEXT_LANE]
     depth, labels = _render(boxes)
-    view = GeometricRetriever(CAMERA).view(depth)
+    view = GeometricRetriever(CAMERA, EGO_LANE).view(depth)
     assert view.ground_fitted and view.valid_fraction == 1.0
     np.testing.assert_allclose(view.ground, [0.0, 0.0, 0.0], atol=5e-3)  # the road is z = 0
     assert view.boxes.shape == (2, 5)  # the pedestrian and the car ahead, nothing else
@@ -116,7 +118,7 @@ def test_what_rises_above_structure_height_is_taken_out_and_the_traffic_beside_i
     def found(S):
         return [k for k in range(len(boxes)) if any(_inside(b, truths[k]) > 0.8 for b in S)]
 
-    plain, ruled = view(), view(structure_height=3.5)
+    plain, ruled = view(structure_height=None), view(structure_height=3.5)
     # the wide corridor alone takes the structure in with the traffic, and the car by the
     # wall is part of the building's object (one cell apart on the ground)
     assert found(plain) == [0, 1, 2, 4, 5]
@@ -227,8 +229,9 @@ def test_a_curved_path_keeps_what_lies_on_it():
     # y = R - sqrt(R^2 - x^2) through (14, 3.5): R = (14^2 + 3.5^2) / 7 = 29.75 m
     car = [16.3, 3.5, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 14
     depth, labels = _render([car])
-    retriever = GeometricRetriever(CAMERA)
+    retriever = GeometricRetriever(CAMERA, EGO_LANE)
     assert retriever(depth).shape == (0, 5)
+    assert GeometricRetriever(CAMERA)(depth).shape == (1, 5)  # the default corridor holds it
     truth = _truth(labels, depth, 0)
     arc = Corridor(1.75, curvature=1 / 29.75)
     xs = np.linspace(0.0, 29.0, 59)
