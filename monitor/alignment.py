@@ -4,7 +4,9 @@ FuzzRisk, Sec. III-A ("Measuring alignment with object detector predictions"): t
 Hungarian algorithm pairs S with P on the distance between box centres; each pair gets
 IoU and RDD; a pair counts only when ``IoU > alpha`` and ``|RDD| < beta``; an S without a
 counted pair scores IoU = 0 and RDD = 1; the frame's features are the means over S,
-IoU~ and RDD~.
+IoU~ and RDD~. ``weighting="inverse_distance"`` makes them means weighted by ``1 / d`` of
+each S (an object at 5 m counts four times one at 20 m: the nearer matters more to a car
+about to reach it); ``"mean"`` is the paper's plain mean.
 
 A frame without safety-critical objects (empty S) has no features: its means are NaN
 (:attr:`Alignment.n_objects` is 0). The caller must check; the NaN is there so that
@@ -25,6 +27,9 @@ from monitor.geometry.boxes import as_boxes, centre_distances
 #: The paper's matching thresholds (Table I, second row).
 DEFAULT_ALPHA = 0.3
 DEFAULT_BETA = 0.2
+#: How the per-object terms become the frame's features: the paper's plain mean over S, or
+#: the mean weighted by 1 / d (metres) of each S.
+WEIGHTINGS = ("mean", "inverse_distance")
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,7 +139,15 @@ def check_thresholds(alpha, beta) -> tuple[float, float]:
     return alpha, beta
 
 
-def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Alignment:
+def check_weighting(weighting) -> str:
+    """Validate the features' weighting (the one rule for it, also the configuration's)."""
+    if weighting not in WEIGHTINGS:
+        raise ValueError(f"weighting = {weighting!r}, must be one of {', '.join(WEIGHTINGS)}")
+    return weighting
+
+
+def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
+          weighting: str = "mean") -> Alignment:
     """Align the safety-critical objects of one frame with the predictions.
 
     Parameters
@@ -148,6 +161,9 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Ali
         A pair counts only when its IoU is ``> alpha``; in ``[0, 1]``.
     beta : float
         A pair counts only when ``|RDD| < beta``; ``> 0``.
+    weighting : str
+        One of :data:`WEIGHTINGS`: ``"mean"`` (the paper) or ``"inverse_distance"`` (each S
+        weighted by ``1 / d``).
 
     Returns
     -------
@@ -158,9 +174,11 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Ali
     Raises
     ------
     ValueError
-        Invalid boxes (message names ``S`` or ``P``, the row and column) or thresholds.
+        Invalid boxes (message names ``S`` or ``P``, the row and column), thresholds or
+        weighting.
     """
     alpha, beta = check_thresholds(alpha, beta)
+    weighting = check_weighting(weighting)
     S = as_boxes(S, "S", positive_depth=True)
     P = as_boxes(P, "P")
     partner = _assign(S, P)
@@ -171,6 +189,10 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA) -> Ali
     iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
+    elif weighting == "inverse_distance":
+        w = 1.0 / S[:, 4]
+        scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
+        iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
     else:
         iou_mean, rdd_mean = iou_sum / m, rdd_sum / m
     return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta)

@@ -25,7 +25,7 @@ from typing import Any
 
 import yaml
 
-from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds
+from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds, check_weighting
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 from monitor.depth.visibility import VisibilityParams
@@ -69,18 +69,23 @@ def _set(obj, name: str, value: Any) -> None:
 
 @dataclass(frozen=True)
 class AlignmentConfig:
-    """Matching thresholds: a pair counts if IoU > alpha and |RDD| < beta.
+    """Matching thresholds: a pair counts if IoU > alpha and |RDD| < beta; and how the
+    per-object terms become IoU~ and RDD~ (``weighting``, one of
+    :data:`monitor.alignment.WEIGHTINGS`).
 
-    The rule for their values is :func:`monitor.alignment.check_thresholds`.
+    The rules for their values are :func:`monitor.alignment.check_thresholds` and
+    :func:`monitor.alignment.check_weighting`.
     """
 
     alpha: float = DEFAULT_ALPHA
     beta: float = DEFAULT_BETA
+    weighting: str = "inverse_distance"
 
     def __post_init__(self):
         alpha, beta = check_thresholds(self.alpha, self.beta)
         _set(self, "alpha", alpha)
         _set(self, "beta", beta)
+        check_weighting(self.weighting)
 
 
 @dataclass(frozen=True)
@@ -125,7 +130,7 @@ class RetrievalConfig:
     geometric : GeometricParams
     """
 
-    method: str = "paper"
+    method: str = "geometric"
     max_range: float = DEFAULT_RANGE_M
     paper: RetrievalParams = field(default_factory=RetrievalParams)
     geometric: GeometricParams = field(default_factory=GeometricParams)
@@ -160,7 +165,7 @@ class RiskConfig:
     """
 
     fail_safe: float = 1.0
-    no_objects: float = 0.0
+    no_objects: float = 0.5
     no_view: float = 1.0
     no_rule_fired: float = 1.0
 

@@ -15,12 +15,17 @@ invalid, detections that are not finite real (n, 7) boxes of sane size and place
 outside [0, 1], give a report with status ``invalid-input``, the reason, and the configured
 fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
 one of them raises instead of hiding in a report. A frame whose depth view finds nothing in
-range gives status ``no-objects`` and the configured ``risk.no_objects``, but only after a
-check that the view could see anything: a frame the depth view cannot see through (its
-lower image blocked by something near, no ground within range, or a region of invalid
-pixels large enough to hide an object: :mod:`monitor.depth.visibility`; or, with the
-geometric view, what it calls blind: :class:`~monitor.depth.geometric.BlindViewError`) gives
-status ``no-view`` and ``risk.no_view`` (1.0 by default), whatever the view found. A frame whose
+range gives status ``no-objects`` and the configured ``risk.no_objects`` (a decision the
+report states: its reason names the risk and where it comes from, its ``free_distance`` how
+far the geometric view saw the corridor free), but only after a check that the view could
+see anything: a frame the depth view cannot see through gives status ``no-view`` and
+``risk.no_view`` (1.0 by default), whatever the view found. Each view has one check per
+failure: the paper's view gets :mod:`monitor.depth.visibility` whole (its lower image
+blocked by something near, no ground within range, a region of invalid pixels large enough
+to hide an object); the geometric view calls its own blind frames
+(:class:`~monitor.depth.geometric.BlindViewError`: too many invalid pixels, in the frame or
+over the corridor's road, or a road seen under its plane) and reports a surface filling the
+view as a near object, so of the visibility check it keeps only the hidden region. A frame whose
 features no rule of the rule base covers gives status ``no-rule-fired`` and
 ``risk.no_rule_fired`` (1.0 by default) instead of the rule base's fallback output (MATLAB's
 midpoint 0.5, which is exactly the shield's threshold).
@@ -95,6 +100,10 @@ class RiskReport:
         Which S matched which P, with IoU and RDD per object.
     fired : list of (rule index, rule text, strength)
         Rules that fired, strongest first (empty unless ``ok``).
+    free_distance : float
+        The geometric view's free distance ahead in the corridor, metres from the ego
+        origin: inf when nothing stands in it within range; NaN for the paper's view (which
+        does not measure it) and for frames without a view (``invalid-input``, ``no-view``).
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
         ``alignment``, ``inference``.
@@ -109,6 +118,7 @@ class RiskReport:
     P: np.ndarray = field(default_factory=lambda: _EMPTY)
     alignment: Alignment | None = None
     fired: list = field(default_factory=list)
+    free_distance: float = float("nan")
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -120,6 +130,7 @@ class RiskReport:
             "S": self.S.tolist(), "P": self.P.tolist(),
             "matched": [] if self.alignment is None else self.alignment.partner.tolist(),
             "fired": [{"rule": r + 1, "text": t, "strength": s} for r, t, s in self.fired],
+            "free_distance": None if np.isnan(self.free_distance) else self.free_distance,
             "timings_ms": {k: 1e3 * v for k, v in self.timings.items()},
         }
 
@@ -174,8 +185,12 @@ class RiskMonitor:
         chosen = self.config.retrieval
         if chosen.method == "geometric":
             self._retriever = GeometricRetriever(camera, chosen.geometric)
+            # the view's own blind checks and near objects say what blocked and no-ground say
+            self._visibility = dataclasses.replace(self.config.visibility, blocked_share=1.0,
+                                                   min_in_range_share=0.0, min_ground_ratio=0.0)
         else:
             self._retriever = Retriever(prior, chosen.paper)
+            self._visibility = self.config.visibility
         self._iou_first = fis.input_names[0] == "iou"
         if warmup:
             self.warmup()
@@ -209,13 +224,18 @@ class RiskMonitor:
         centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
         return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
 
-    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, str]:
-        """S, and why the view cannot see through the frame ("" when it can)."""
-        try:
-            S = self._retriever(depth)
-        except BlindViewError as exc:
-            return np.zeros((0, 5)), str(exc)
-        return S, check_view(depth, self.config.visibility)
+    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, float, str]:
+        """S, the free distance ahead (NaN for the paper's view) and why the view cannot see
+        through the frame ("" when it can)."""
+        if isinstance(self._retriever, GeometricRetriever):
+            try:
+                view = self._retriever.view(depth)
+            except BlindViewError as exc:
+                return np.zeros((0, 5)), float("nan"), str(exc)
+            S, free = view.boxes, view.free_distance
+        else:
+            S, free = self._retriever(depth), float("nan")
+        return S, free, check_view(depth, self._visibility)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -298,7 +318,7 @@ class RiskMonitor:
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
-            S, blind = self._depth_view(depth)
+            S, free, blind = self._depth_view(depth)
         except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
@@ -306,16 +326,20 @@ class RiskMonitor:
         P = self._project(boxes)
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
-        alignment = align(S, P, self.config.alignment.alpha, self.config.alignment.beta)
+        chosen = self.config.alignment
+        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:
             return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=blind,
                               S=S, P=P, alignment=alignment, timings=timings)
         if alignment.n_objects == 0:
+            seen = "" if np.isnan(free) else " (the corridor is free to its end)"
             return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
-                              reason=f"no safety-critical object within {self.config.max_range:g} m",
-                              S=S, P=P, alignment=alignment, timings=timings)
+                              reason=f"no safety-critical object within {self.config.max_range:g} m"
+                                     f"{seen}: risk.no_objects = {self.config.risk.no_objects:g}, the "
+                                     "configured risk of an empty view (not a measured zero)",
+                              S=S, P=P, alignment=alignment, free_distance=free, timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
         if self.explain:  # one inference either way: the explanation carries the output
@@ -328,6 +352,7 @@ class RiskMonitor:
             return RiskReport(risk=self.config.risk.no_rule_fired, status=NO_RULE_FIRED,
                               reason=f"no rule of {self.fis.name!r} fired for IoU~ = {iou:.6g}, "
                                      f"RDD~ = {rdd:.6g}: the rule base has no answer there",
-                              iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, timings=timings)
+                              iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, free_distance=free,
+                              timings=timings)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
-                          alignment=alignment, fired=fired, timings=timings)
+                          alignment=alignment, fired=fired, free_distance=free, timings=timings)

@@ -214,14 +214,15 @@ def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
 
 @kernel
 def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
-             centre_y, tan_heading, step, half_width, obstacle, corridor):
-    """Which blocks stand above the road, and which of those are inside the corridor.
+             centre_y, tan_heading, step, half_width, tall_height, obstacle, corridor, tall):
+    """Which blocks stand above the road, which of those are inside the corridor, and
+    which blocks are taller than traffic.
 
     A valid block's height above the plane is ``h = z - (a x + b y + c)``. ``obstacle``
     (flat uint8) gets 1 where ``min_height <= h <= max_height`` and ``d <= max_range``;
     ``corridor`` gets 1 where a block is an obstacle and its lateral offset from the
-    centreline is at most ``half_width``. Returns ``(valid blocks, blocks with h <
-    -below_margin)``.
+    centreline is at most ``half_width``; ``tall`` gets 1 where ``h > tall_height`` (inf:
+    never). Returns ``(valid blocks, blocks with h < -below_margin)``.
     """
     n_valid = 0
     n_below = 0
@@ -229,12 +230,14 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
         d = ds[k]
         obstacle[k] = 0
         corridor[k] = 0
+        tall[k] = 0
         if not d > 0.0:
             continue
         n_valid += 1
         x, y = xs[k], ys[k]
         h = zs[k] - (a * x + b * y + c)
         n_below += h < -below_margin
+        tall[k] = h > tall_height
         if h >= min_height and h <= max_height and d <= max_range:
             obstacle[k] = 1
             corridor[k] = _lateral(x, y, centre_y, tan_heading, step) <= half_width
@@ -307,6 +310,42 @@ def label_objects(xs, ys, obstacle, x0, y0, cell, parent, ids, labels):
                 ids_flat[root] = n
                 n += 1
             labels[r, col] = ids_flat[root]
+    return n
+
+
+@kernel
+def clear_structure(xs, ys, tall, x0, y0, cell, marks, obstacle, corridor):
+    """Take the obstacle blocks standing where something tall rises from the ground.
+
+    A block with ``tall`` set marks the cell of its ground position (``xs, ys``) on the
+    (nx, ny) grid of :func:`label_objects`, and the cell's 8 neighbours (the scatter of a
+    depth estimate's error; ``marks`` int32 scratch; blocks off the grid mark nothing).
+    Every obstacle block in a marked cell is cleared from ``obstacle`` and ``corridor``
+    (uint8, like ``tall`` (rows, cols)). Returns the number cleared.
+    """
+    rows, cols = tall.shape
+    nx, ny = marks.shape
+    flat = marks.ravel()
+    flat[:] = 0
+    for r in range(rows):
+        for col in range(cols):
+            if tall[r, col]:
+                fi = math.floor((xs[r, col] - x0) / cell)
+                fj = math.floor((ys[r, col] - y0) / cell)
+                if 0 <= fi < nx and 0 <= fj < ny:  # the cell and its 8 neighbours
+                    for i in range(max(int(fi) - 1, 0), min(int(fi) + 2, nx)):
+                        for j in range(max(int(fj) - 1, 0), min(int(fj) + 2, ny)):
+                            flat[i * ny + j] = 1
+    n = 0
+    for r in range(rows):
+        for col in range(cols):
+            if obstacle[r, col]:
+                fi = math.floor((xs[r, col] - x0) / cell)
+                fj = math.floor((ys[r, col] - y0) / cell)
+                if 0 <= fi < nx and 0 <= fj < ny and flat[int(fi) * ny + int(fj)]:
+                    obstacle[r, col] = 0
+                    corridor[r, col] = 0
+                    n += 1
     return n
 
 

@@ -14,7 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fuzzcore
-from monitor.config import MonitorConfig, RiskConfig, load_config
+from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig, load_config
 from monitor.depth.visibility import VisibilityParams, check_view
 from monitor.geometry.camera import Camera
 from monitor.risk_monitor import NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
@@ -29,6 +29,11 @@ NONE = np.zeros((0, 7))
 CAR_8M = np.array([[8.0 + 2.25, 0.0, 0.75, 1.8, 4.5, 1.5, 0.0]])
 
 
+#: these frames are about the paper's depth view and its visibility check (the default view
+#: is the geometric one, which calls its own blind frames: tests/monitor/depth/test_geometric.py)
+PAPER = replace(MonitorConfig(), retrieval=RetrievalConfig(method="paper"))
+
+
 def _render(boxes):
     result = render_depth(CAMERA, boxes)
     return np.where(np.isfinite(result.depth), result.depth, FAR_M).astype(np.float32), result.labels
@@ -41,7 +46,7 @@ def road():
 
 @pytest.fixture(scope="module")
 def monitor(road):
-    return RiskMonitor(fuzzcore.load(shipped_rules()), (1.0 / road).astype(np.float32), CAMERA)
+    return RiskMonitor(fuzzcore.load(shipped_rules()), (1.0 / road).astype(np.float32), CAMERA, PAPER)
 
 
 def test_empty_road_is_still_no_objects(monitor, road):
@@ -49,7 +54,7 @@ def test_empty_road_is_still_no_objects(monitor, road):
     # all of the lower half lies within 20 m at its bottom, and it comes nearer downwards
     assert check_view(road) == ""
     report = monitor.step(road, NONE)
-    assert report.status == NO_OBJECTS and report.risk == 0.0
+    assert report.status == NO_OBJECTS and report.risk == monitor.config.risk.no_objects
 
 
 @pytest.mark.parametrize("metres, rule", [
@@ -95,14 +100,14 @@ def test_small_invalid_holes_do_not_fire(monitor, road):
 
 
 def test_rules_can_be_turned_off_and_risk_configured(road):
-    config = replace(MonitorConfig(), visibility=VisibilityParams(blocked_share=1.0, min_in_range_share=0.0,
+    config = replace(PAPER, visibility=VisibilityParams(blocked_share=1.0, min_in_range_share=0.0,
                                                                   min_ground_ratio=0.0, hidden_size=None),
                      risk=RiskConfig(no_view=0.7))
     monitor = RiskMonitor(fuzzcore.load(shipped_rules()), (1.0 / road).astype(np.float32), CAMERA, config)
     for metres in (1.0, 10.0, 1e6):
         assert monitor.step(np.full((H, W), metres, np.float32), NONE).status == NO_OBJECTS
     on = RiskMonitor(fuzzcore.load(shipped_rules()), (1.0 / road).astype(np.float32), CAMERA,
-                     replace(MonitorConfig(), risk=RiskConfig(no_view=0.7)))
+                     replace(PAPER, risk=RiskConfig(no_view=0.7)))
     assert on.step(np.full((H, W), 1.0, np.float32), NONE).risk == 0.7
 
 
@@ -143,7 +148,7 @@ def test_no_rule_fired_is_its_own_status(road, tmp_path):
     assert fis.infer(iou=1.0, rdd=0.0) == 0.5
     prior = (1.0 / road).astype(np.float32)
     depth, _ = _render(CAR_8M)
-    monitor = RiskMonitor(fis, prior, CAMERA)
+    monitor = RiskMonitor(fis, prior, CAMERA, PAPER)
     # the car detected where it is: IoU~ high, RDD~ near 0, so "rdd is high" does not fire
     report = monitor.step(depth, CAR_8M)
     assert report.status == NO_RULE_FIRED and report.risk == 1.0 and report.fired == []
@@ -151,7 +156,7 @@ def test_no_rule_fired_is_its_own_status(road, tmp_path):
     # missed: RDD~ = 1 fires the rule, and the report is the rule base's
     missed = monitor.step(depth, NONE)
     assert missed.status == OK and missed.risk == pytest.approx(fis.infer(iou=0.0, rdd=1.0))
-    quiet = RiskMonitor(fis, prior, CAMERA, replace(MonitorConfig(), risk=RiskConfig(no_rule_fired=0.25)),
+    quiet = RiskMonitor(fis, prior, CAMERA, replace(PAPER, risk=RiskConfig(no_rule_fired=0.25)),
                         explain=False)
     report = quiet.step(depth, CAR_8M)
     assert report.status == NO_RULE_FIRED and report.risk == 0.25

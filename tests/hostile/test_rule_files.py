@@ -88,9 +88,6 @@ def test_files_without_the_header_need_no_end_line(tmp_path):
     path = tmp_path / "hand.yaml"
     path.write_text(GOOD)
     assert len(fuzzcore.load(path).rules) == 2
-    # the shipped tuned rule bases carry the older header, and load as before
-    for name in ("fuzzrisk-tuned.yaml", "fuzzrisk-learned.yaml", "fuzzrisk-joint.yaml"):
-        assert fuzzcore.load(ROOT / "rules" / name).rules
 
 
 def test_save_replaces_a_file_whole_or_not_at_all(tmp_path):

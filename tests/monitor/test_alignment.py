@@ -37,6 +37,23 @@ def test_hand_made_frame():
     assert a.n_objects == 2
 
 
+def test_inverse_distance_weighting_of_the_hand_made_frame():
+    S = np.array([[100, 100, 20, 20, 10.0], [300, 100, 40, 20, 8.0]])
+    P = np.array([[305, 100, 40, 20, 8.8], [104, 100, 20, 20, 13.0], [500, 500, 10, 10, 5.0]])
+    a = align(S, P, weighting="inverse_distance")
+    # weights 1/10 and 1/8, sum 0.225: S0 (unmatched, IoU 0, RDD 1) 0.1 / 0.225 = 4/9,
+    # S1 (IoU 7/9, RDD 0.1) 0.125 / 0.225 = 5/9
+    assert a.iou_mean == pytest.approx(5 / 9 * 7 / 9)
+    assert a.rdd_mean == pytest.approx(4 / 9 * 1.0 + 5 / 9 * 0.1)
+    # the per-object terms are those of the plain mean
+    plain = align(S, P)
+    np.testing.assert_array_equal(a.iou, plain.iou)
+    np.testing.assert_array_equal(a.rdd, plain.rdd)
+    assert np.isnan(align(EMPTY, P, weighting="inverse_distance").iou_mean)
+    with pytest.raises(ValueError, match="weighting = 'nearest', must be one of mean, inverse_distance"):
+        align(S, P, weighting="nearest")
+
+
 def test_relaxed_thresholds_count_more_pairs():
     S = np.array([[100, 100, 20, 20, 10.0]])
     P = np.array([[104, 100, 20, 20, 13.0]])  # IoU 2/3, RDD 0.3 (see the hand-made frame)

@@ -49,13 +49,13 @@ def test_user_file_overrides_only_what_it_names(tmp_path):
                                           "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
     assert config.alignment == AlignmentConfig(alpha=0.5, beta=0.2)
     assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=0, deceleration=3.0)
-    assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.0)
+    assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.5)
     assert config.detections == DetectionsConfig()
     assert config.max_range == 30.0 and isinstance(config.max_range, float)
     # one range limit, everywhere
     assert config.retrieval.paper.max_range == config.retrieval.geometric.max_range == 30.0
     assert config.retrieval.paper.depth_percentile == 5.0 and config.retrieval.paper.canny_low == 40.0
-    assert config.retrieval.method == "paper"
+    assert config.retrieval.method == "geometric"
     assert config.retrieval.geometric == GeometricParams(stride=2, max_range=30.0)
 
 

@@ -23,6 +23,8 @@ from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
 CAMERA = Camera.nuscenes_front()
+#: the paper's depth view (the default is the geometric one: its tests are below)
+PAPER = replace(MonitorConfig(), retrieval=RetrievalConfig(method="paper"))
 #: a depth network reports far things (the sky) at its largest depth, not as invalid
 FAR_M = 80.0
 # a pedestrian 9 m ahead, slightly left: x, y, z (centre), w, l, h, yaw (ego frame)
@@ -47,7 +49,7 @@ def _depth(boxes):
 
 @pytest.fixture(scope="module")
 def monitor(fis, prior):
-    return RiskMonitor(fis, prior, CAMERA)
+    return RiskMonitor(fis, prior, CAMERA, PAPER)
 
 
 @pytest.fixture(scope="module")
@@ -186,8 +188,8 @@ _SMALL = Camera(CAMERA.K * np.array([[0.1], [0.1], [1.0]]), 160, 90, CAMERA.cam_
 def small_monitor(fis):
     depth = render_depth(_SMALL, np.zeros((0, 7))).depth
     prior = (1.0 / np.where(np.isfinite(depth), depth, FAR_M)).astype(np.float32)
-    retrieval = MonitorConfig().retrieval
-    return RiskMonitor(fis, prior, _SMALL, replace(MonitorConfig(), retrieval=replace(
+    retrieval = PAPER.retrieval
+    return RiskMonitor(fis, prior, _SMALL, replace(PAPER, retrieval=replace(
         retrieval, paper=replace(retrieval.paper, min_size=4.0))))
 
 
@@ -292,7 +294,7 @@ def test_the_first_step_after_construction_compiles_nothing(mode, method):
 
 
 def test_fail_safe_is_configurable(fis, prior):
-    config = replace(MonitorConfig(), risk=RiskConfig(fail_safe=0.9))
+    config = replace(PAPER, risk=RiskConfig(fail_safe=0.9))
     report = RiskMonitor(fis, prior, CAMERA, config).step(np.zeros((900, 1600), np.float32), np.zeros((0, 7)))
     assert report.status == INVALID_INPUT and report.risk == 0.9
 
@@ -349,6 +351,33 @@ def test_the_geometric_view_ignores_a_wall_beside_the_road(geometric_monitor, mo
     report = geometric_monitor.step(_depth(wall), np.zeros((0, 7)))
     assert report.status == NO_OBJECTS
     assert monitor.step(_depth(wall), np.zeros((0, 7))).status == OK  # the paper's view: an object
+
+
+def test_no_objects_states_its_risk_and_the_geometric_view_its_free_distance(geometric_monitor, monitor):
+    road = _depth(np.zeros((0, 7)))
+    for mon in (geometric_monitor, monitor):
+        report = mon.step(road, np.zeros((0, 7)))
+        assert report.status == NO_OBJECTS and report.risk == mon.config.risk.no_objects
+        assert f"risk.no_objects = {mon.config.risk.no_objects:g}" in report.reason
+    assert geometric_monitor.step(road, np.zeros((0, 7))).free_distance == np.inf
+    assert np.isnan(monitor.step(road, np.zeros((0, 7))).free_distance)  # the paper's view: unmeasured
+    # with the pedestrian: its front face, 9 - 0.35 = 8.65 m ahead of the ego origin
+    seen = geometric_monitor.step(_depth(PEDESTRIAN), PEDESTRIAN)
+    assert seen.status == OK and seen.free_distance == pytest.approx(8.65, abs=0.01)
+    assert seen.to_dict()["free_distance"] == seen.free_distance
+
+
+def test_a_surface_filling_the_view_is_a_near_object_to_the_geometric_view_and_no_view_to_the_paper(
+        geometric_monitor, monitor):
+    near = np.ones((CAMERA.height, CAMERA.width), dtype=np.float32)  # a surface 1 m ahead
+    assert monitor.step(near, np.zeros((0, 7))).status == NO_VIEW  # the visibility check: blocked
+    report = geometric_monitor.step(near, np.zeros((0, 7)))
+    # the geometric view sees it (one object at 1 m), the hidden-region check alone is left
+    assert report.status == OK and report.S.shape == (1, 5) and report.S[0, 4] == 1.0
+    assert report.iou == 0.0 and report.rdd == 1.0  # undetected: the worst scores
+    hidden = _depth(np.zeros((0, 7)))
+    hidden[600:700, 700:800] = np.nan  # a 100 px square of invalid pixels in the lower half
+    assert geometric_monitor.step(hidden, np.zeros((0, 7))).status == NO_VIEW
 
 
 def test_a_frame_the_geometric_view_calls_blind_has_no_view(geometric_monitor, scene_depth):

@@ -223,7 +223,7 @@ def test_the_monitor_runs_on_a_frame(reader):
     prior = np.full((H, W), 1.0 / FAR_M, np.float32)
     # a 160 x 90 image: full resolution and small boxes (the defaults suit 1600 x 900)
     # the painted frame has no road: the view check (which would call it "no ground") is off
-    config = MonitorConfig(retrieval=RetrievalConfig(paper=RetrievalParams(downsample=1, min_size=4.0)),
+    config = MonitorConfig(retrieval=RetrievalConfig(method="paper", paper=RetrievalParams(downsample=1, min_size=4.0)),
                            visibility=VisibilityParams(min_in_range_share=0.0, min_ground_ratio=0.0))
     monitor = RiskMonitor(fuzzcore.load(shipped_rules()), prior, f0.camera, config)
     report = monitor.step(depth, f0.det_boxes3d, f0.det_scores)
@@ -370,7 +370,7 @@ def test_features_command_runs_on_nuscenes(tmp_path, capsys):
     depth[int(cy - h / 2):int(cy + h / 2), int(cx - w / 2):int(cx + w / 2)] = d
     np.save(kwargs["depth"] / "n000__CAM_FRONT__0.npy", depth)
     save_prior(tmp_path / "prior.npy", np.full((H, W), 1.0 / FAR_M, np.float32))
-    (tmp_path / "config.yaml").write_text("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
+    (tmp_path / "config.yaml").write_text("retrieval:\n  method: paper\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
                                           # no road: view check off
                                           "visibility:\n  min_in_range_share: 0.0\n  min_ground_ratio: 0.0\n")
     out = tmp_path / "f.csv"

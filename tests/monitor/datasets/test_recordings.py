@@ -15,7 +15,7 @@ from recording_fixture import read_rows
 from test_nuscenes import CAM_ROTATION, CAM_TRANSLATION, FAR_M, H, K, VERSION, W, results, tables, write
 
 # a 160 x 90 image without a road: full resolution, small boxes, the view check off
-CONFIG = ("retrieval:\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
+CONFIG = ("retrieval:\n  method: paper\n  paper:\n    downsample: 1\n    min_size: 4.0\n"
           "visibility:\n  min_in_range_share: 0.0\n  min_ground_ratio: 0.0\n")
 
 

@@ -31,6 +31,8 @@ PEDESTRIAN = [9.0, -1.0, 0.885, 0.67, 0.73, 1.77, 0.0]      # in the corridor's 
 WALL = [15.0, 6.5, 2.0, 0.4, 30.0, 4.0, 0.0]                # beside the road, left
 POLE = [8.0, -5.5, 2.0, 0.2, 0.2, 4.0, 0.0]                 # on the sidewalk, right
 CAR_NEXT_LANE = [14.0, -3.5, 0.865, 1.95, 4.6, 1.73, 0.0]   # the lane to the right
+#: the ego lane alone (the default corridor, 3.5 m either side, holds half of each neighbour)
+EGO_LANE = GeometricParams(corridor_half_width=1.75)
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -74,7 +76,7 @@ def _pitched(camera, degrees):
 def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     boxes = [CAR_AHEAD, PEDESTRIAN, WALL, POLE, CAR_NEXT_LANE]
     depth, labels = _render(boxes)
-    view = GeometricRetriever(CAMERA).view(depth)
+    view = GeometricRetriever(CAMERA, EGO_LANE).view(depth)
     assert view.ground_fitted and view.valid_fraction == 1.0
     np.testing.assert_allclose(view.ground, [0.0, 0.0, 0.0], atol=5e-3)  # the road is z = 0
     assert view.boxes.shape == (2, 5)  # the pedestrian and the car ahead, nothing else
@@ -88,6 +90,48 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     # the pedestrian's front face is at x = 9 - 0.73 / 2 = 8.635 m
     assert view.free_distance == pytest.approx(8.635, abs=0.01)
     assert view.boxes[0, 4] < view.boxes[1, 4]
+
+
+# a street's structure and its traffic beside the lane, for a corridor wide enough to hold both
+BUILDING = [15.0, 6.5, 4.0, 0.4, 30.0, 8.0, 0.0]            # 8 m frontage, left: face at y = 6.3
+TALL_POLE = [12.0, -5.5, 3.0, 0.2, 0.2, 6.0, 0.0]           # 6 m pole on the right sidewalk
+PARKED_CAR = [12.0, -4.5, 0.865, 1.95, 4.6, 1.73, 0.0]      # on the right shoulder
+CAR_BY_WALL = [18.0, 4.9, 0.865, 1.95, 4.6, 1.73, 0.0]      # left side at y = 5.875, 0.425 m off the face
+WIDE = dict(corridor_half_width=8.0)
+
+
+def _inside(box, truth):
+    """Share of ``box``'s area inside ``truth`` (a tall thing's band part is a small box in it)."""
+    w = min(box[0] + box[2] / 2, truth[0] + truth[2] / 2) - max(box[0] - box[2] / 2, truth[0] - truth[2] / 2)
+    h = min(box[1] + box[3] / 2, truth[1] + truth[3] / 2) - max(box[1] - box[3] / 2, truth[1] - truth[3] / 2)
+    return max(w, 0.0) * max(h, 0.0) / (box[2] * box[3])
+
+
+def test_what_rises_above_structure_height_is_taken_out_and_the_traffic_beside_it_kept():
+    boxes = [CAR_AHEAD, PEDESTRIAN, PARKED_CAR, CAR_BY_WALL, BUILDING, TALL_POLE]
+    depth, labels = _render(boxes)
+    truths = [_truth(labels, depth, k) for k in range(len(boxes))]
+
+    def view(**params):
+        return GeometricRetriever(CAMERA, GeometricParams(**WIDE, **params)).view(depth).boxes
+
+    def found(S):
+        return [k for k in range(len(boxes)) if any(_inside(b, truths[k]) > 0.8 for b in S)]
+
+    plain, ruled = view(structure_height=None), view(structure_height=3.5)
+    # the wide corridor alone takes the structure in with the traffic, and the car by the
+    # wall is part of the building's object (one cell apart on the ground)
+    assert found(plain) == [0, 1, 2, 4, 5]
+    # the building and the pole rise above 3.5 m: their cells go; four objects are left, one
+    # per road user, the car by the wall included (its cells are its own), with their boxes
+    assert len(ruled) == 4
+    for k in (0, 1, 2, 3):
+        found_box, score = _match(ruled, truths[k])
+        assert score > 0.75 and found_box[4] == pytest.approx(truths[k][4], rel=0.01)
+    # a truck 4 m tall ahead stays traffic under the default-like 4.2 m
+    truck = [16.0, 0.0, 2.0, 2.5, 10.0, 4.0, 0.0]
+    depth_truck, _ = _render([truck])
+    assert GeometricRetriever(CAMERA, GeometricParams(structure_height=4.2))(depth_truck).shape == (1, 5)
 
 
 def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
@@ -185,8 +229,9 @@ def test_a_curved_path_keeps_what_lies_on_it():
     # y = R - sqrt(R^2 - x^2) through (14, 3.5): R = (14^2 + 3.5^2) / 7 = 29.75 m
     car = [16.3, 3.5, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 14
     depth, labels = _render([car])
-    retriever = GeometricRetriever(CAMERA)
+    retriever = GeometricRetriever(CAMERA, EGO_LANE)
     assert retriever(depth).shape == (0, 5)
+    assert GeometricRetriever(CAMERA)(depth).shape == (1, 5)  # the default corridor holds it
     truth = _truth(labels, depth, 0)
     arc = Corridor(1.75, curvature=1 / 29.75)
     xs = np.linspace(0.0, 29.0, 59)
@@ -321,10 +366,10 @@ def test_classify_equals_numpy():
     x, y, z, d = _cloud(3)
     corridor = Corridor(1.75, curvature=0.02)
     centre, tan = corridor.table(40.0, CORRIDOR_STEP_M)
-    obstacle, inside = np.empty(x.size, np.uint8), np.empty(x.size, np.uint8)
+    obstacle, inside, tall = (np.empty(x.size, np.uint8) for _ in range(3))
     plane = (0.02, -0.01, 0.1)
     n_valid, n_below = kernels.classify(x, y, z, d, *plane, 0.2, 2.5, 20.0, 0.05, centre, tan,
-                                        CORRIDOR_STEP_M, 1.75, obstacle, inside)
+                                        CORRIDOR_STEP_M, 1.75, 1.0, obstacle, inside, tall)
     x64, y64, z64, d64 = (a.astype(np.float64) for a in (x, y, z, d))
     h = z64 - (0.02 * x64 - 0.01 * y64 + 0.1)
     valid = d64 > 0
@@ -334,6 +379,8 @@ def test_classify_equals_numpy():
     lateral = np.abs(y64 - centre[row] - tan[row] * (x64 - tangent_x)) / np.hypot(1.0, tan[row])
     np.testing.assert_array_equal(obstacle, expected)
     np.testing.assert_array_equal(inside, expected & (lateral <= 1.75))
+    np.testing.assert_array_equal(tall, valid & (h > 1.0))
+    assert 0 < tall.sum() < valid.sum()
     assert n_valid == valid.sum() and n_below == (valid & (h < -0.05)).sum()
     assert 0 < inside.sum() < expected.sum()
 
@@ -382,6 +429,28 @@ def test_label_objects_equals_scipy_on_the_occupancy_grid():
     np.testing.assert_array_equal(labels, expected)
 
 
+def test_clear_structure_equals_numpy():
+    rng = np.random.default_rng(9)
+    xs = rng.uniform(0.0, 12.0, (30, 40)).astype(np.float32)
+    ys = rng.uniform(-6.0, 6.0, (30, 40)).astype(np.float32)
+    tall = (rng.random((30, 40)) < 0.02).astype(np.uint8)
+    tall[0, 0], xs[0, 0] = 1, 50.0  # off the grid: marks nothing
+    obstacle = (rng.random((30, 40)) < 0.3).astype(np.uint8)
+    corridor = obstacle * (rng.random((30, 40)) < 0.5).astype(np.uint8)
+    shape = (40, 40)
+    gi, gj = np.floor(xs / 0.3).astype(int), np.floor((ys + 6.0) / 0.3).astype(int)
+    on = (gi >= 0) & (gi < shape[0]) & (gj >= 0) & (gj < shape[1])
+    marked = np.zeros(shape, bool)
+    marked[gi[(tall > 0) & on], gj[(tall > 0) & on]] = True
+    marked = ndimage.binary_dilation(marked, structure=np.ones((3, 3)))
+    cleared = (obstacle > 0) & on & marked[np.clip(gi, 0, 39), np.clip(gj, 0, 39)]
+    expected_obstacle, expected_corridor = obstacle * ~cleared, corridor * ~cleared
+    n = kernels.clear_structure(xs, ys, tall, 0.0, -6.0, 0.3, np.empty(shape, np.int32), obstacle, corridor)
+    assert n == cleared.sum() > 20
+    np.testing.assert_array_equal(obstacle, expected_obstacle)
+    np.testing.assert_array_equal(corridor, expected_corridor)
+
+
 def test_object_stats_equals_numpy():
     rng = np.random.default_rng(8)
     labels = rng.integers(-1, 6, (20, 30)).astype(np.int32)
@@ -420,6 +489,8 @@ def test_object_stats_equals_numpy():
     ("max_tilt_deg", 50.0, "max_tilt_deg = 50.0"),
     ("max_invalid_fraction", 1.5, r"max_invalid_fraction = 1.5, must be a share in \[0, 1\]"),
     ("seed", -1, "seed = -1"),
+    ("structure_height", 2.0, "structure_height must be above max_height"),
+    ("structure_height", -1.0, r"structure_height = -1.0, must be a finite number of metres > 0 or None"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
