@@ -11,7 +11,8 @@ top-level value, so one range limit holds everywhere.
 
 Errors are :class:`ConfigError` naming the file and the key path
 (``risk.fail_safe = '1.0', must be a number``). Duplicate keys, unknown keys, wrong types,
-values out of range and nesting deeper than :data:`MAX_NESTING` are errors.
+values out of range and nesting deeper than :data:`fuzzcore.strict_yaml.MAX_DEPTH` are errors
+(the file is read by :func:`fuzzcore.strict_yaml.load`, as rule files are).
 """
 from __future__ import annotations
 
@@ -23,8 +24,7 @@ from dataclasses import dataclass, field, fields, is_dataclass, replace
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from fuzzcore import strict_yaml
 from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds, check_weighting
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
@@ -33,9 +33,6 @@ from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.geometry.camera import DISTANCES
 
 DEFAULT_CONFIG_PATH = Path(__file__).with_name("default_config.yaml")
-
-#: Deepest nesting of mappings and lists a configuration file may have (the real one has 2).
-MAX_NESTING = 8
 
 
 class ConfigError(ValueError):
@@ -254,52 +251,16 @@ class MonitorConfig:
 
 
 # ----------------------------------------------------------------------------- reading
-class _ConfigLoader(yaml.SafeLoader):
-    """Safe loading, plus: duplicate keys and deep nesting are errors (not last-wins, not a
-    RecursionError: PyYAML composes nested nodes recursively)."""
-
-    def __init__(self, stream):
-        super().__init__(stream)
-        self._nesting = 0
-
-    def compose_node(self, parent, index):
-        self._nesting += 1
-        try:
-            if self._nesting > MAX_NESTING:
-                mark = self.peek_event().start_mark
-                raise yaml.MarkedYAMLError(problem=f"nested deeper than {MAX_NESTING} levels",
-                                           problem_mark=mark)
-            return super().compose_node(parent, index)
-        finally:
-            self._nesting -= 1
-
-    def construct_mapping(self, node, deep=False):
-        seen: dict[Any, int] = {}
-        for key_node, _ in node.value:
-            if key_node.tag == "tag:yaml.org,2002:merge":
-                continue
-            key = self.construct_object(key_node, deep=True)
-            line = key_node.start_mark.line + 1
-            if isinstance(key, typing.Hashable) and key in seen:
-                raise yaml.MarkedYAMLError(problem=f"duplicate key {key!r} (first at line {seen[key]})",
-                                           problem_mark=key_node.start_mark)
-            if isinstance(key, typing.Hashable):
-                seen[key] = line
-        return super().construct_mapping(node, deep=deep)
-
-
 def _read(path: Path) -> dict:
     try:
         text = path.read_bytes().decode("utf-8")
     except UnicodeDecodeError as exc:
         raise ConfigError(f"{path}: not UTF-8 text (byte {exc.start}: {exc.reason})") from None
     try:
-        data = yaml.load(text, Loader=_ConfigLoader)
-    except yaml.MarkedYAMLError as exc:
-        where = f", line {exc.problem_mark.line + 1}" if exc.problem_mark else ""
-        raise ConfigError(f"{path}{where}: not a valid configuration: {exc.problem}") from None
-    except (yaml.YAMLError, ValueError, TypeError) as exc:  # PyYAML's constructors: a bad date, ...
-        raise ConfigError(f"{path}: not valid YAML: {exc}") from None
+        data = strict_yaml.load(text)
+    except strict_yaml.YamlError as exc:
+        where = f", {exc.place}" if exc.place else ""
+        raise ConfigError(f"{path}{where}: not a valid configuration: {exc.detail}") from None
     if data is None:
         return {}
     if not isinstance(data, dict):

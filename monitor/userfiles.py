@@ -27,9 +27,6 @@ from pathlib import Path
 import numpy as np
 
 from fuzzcore.outputs import write_atomic
-# Still imported from here by monitor/cli/eval.py, monitor/cli/demo.py and monitor/depth/files.py
-# (being changed on another branch): they move to fuzzcore.outputs, then this line goes.
-from fuzzcore.outputs import check_output_folder, write_text  # noqa: F401
 
 #: Largest element count :func:`read_npy` and :func:`check_png_size` accept by default:
 #: 50 million pixels (an 8K frame is 33 million; 200 MB as float32).

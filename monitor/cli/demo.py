@@ -24,6 +24,7 @@ import numpy as np
 from tqdm import tqdm
 
 import fuzzcore
+from fuzzcore.outputs import check_output_folder, write_text
 from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
 from monitor.config import load_config
 from monitor.offline.evaluation import observe, recall_table, rmse_table
@@ -31,7 +32,6 @@ from monitor.offline.measures import frame_truth, quality_tables, training_mean
 from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
-from monitor.userfiles import check_output_folder, write_text
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules

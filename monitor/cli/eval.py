@@ -30,6 +30,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 import fuzzcore
+from fuzzcore.outputs import check_output_folder, write_text
 from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
@@ -39,7 +40,6 @@ from monitor.offline.run import observe_plans
 from monitor.report.quality_figure import save_quality_figure
 from monitor.shipped import rules_dir, shipped_rules
 from monitor.report.tables import format_table
-from monitor.userfiles import check_output_folder, write_text
 
 QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),

@@ -24,7 +24,8 @@ from typing import Iterator
 import cv2
 import numpy as np
 
-from monitor.userfiles import check_png_size, read_npy, write_atomic
+from fuzzcore.outputs import write_atomic
+from monitor.userfiles import check_png_size, read_npy
 
 #: KITTI's depth PNGs store metres * 256 in uint16
 KITTI_PNG_SCALE = 256.0
@@ -113,7 +114,7 @@ def _load_png(path: Path, png_scale: float) -> np.ndarray:
 
 def save_depth_png(path: str | Path, depth: np.ndarray, *, png_scale: float = KITTI_PNG_SCALE) -> None:
     """Write a depth map as a 16-bit PNG (value = round(depth * png_scale), 0 = invalid),
-    whole or not at all (:func:`monitor.userfiles.write_atomic`).
+    whole or not at all (:func:`fuzzcore.outputs.write_atomic`).
 
     Parameters
     ----------

@@ -181,7 +181,7 @@ def prior_of_files(paths: list, png_scale: float, *, workers: int = 1, ray: str 
 
 def save_prior(path: str | Path, prior: np.ndarray) -> None:
     """Write a prior (float32 (H, W), 1/m, NaN = no sample) as ``.npy``, whole or not at
-    all (:func:`monitor.userfiles.write_atomic`)."""
+    all (:func:`fuzzcore.outputs.write_atomic`)."""
     path = Path(path)
     if path.suffix.lower() != ".npy":
         raise ValueError(f"prior path {path} must end in .npy")

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import yaml
 
+from fuzzcore.strict_yaml import MAX_DEPTH
 from monitor.alignment import check_thresholds
-from monitor.config import (DEFAULT_CONFIG_PATH, MAX_NESTING, AlignmentConfig, ConfigError,
-                            DetectionsConfig, MonitorConfig, RetrievalConfig, RiskConfig, ShieldConfig,
-                            load_config)
+from monitor.config import (DEFAULT_CONFIG_PATH, AlignmentConfig, ConfigError, DetectionsConfig,
+                            MonitorConfig, RetrievalConfig, RiskConfig, ShieldConfig, load_config)
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 
@@ -111,10 +111,10 @@ def test_bad_files_name_the_file_and_the_key(tmp_path, text, message):
 
 def test_deep_nesting_is_an_error_not_a_recursion_error(tmp_path):
     path = _write(tmp_path, "alignment: " + "[" * 5000 + "]" * 5000 + "\n")  # 10 kB
-    with pytest.raises(ConfigError, match=f"line 1: not a valid configuration: nested deeper than {MAX_NESTING}"):
+    with pytest.raises(ConfigError, match=f"line 1: not a valid configuration: lists or mappings nested more than {MAX_DEPTH} levels"):
         load_config(path)
     path = _write(tmp_path, "x: " + "{a: " * 3000 + "1" + "}" * 3000 + "\n")
-    with pytest.raises(ConfigError, match="nested deeper than"):
+    with pytest.raises(ConfigError, match="nested more than"):
         load_config(path)
 
 
