@@ -44,6 +44,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import peers  # noqa: E402
+from reporting import write_report  # noqa: E402
 import reference  # noqa: E402
 
 #: scikit-fuzzy 0.5 calls np.maximum with a positional output, which numpy 2 deprecates
@@ -73,18 +74,14 @@ def installed(fis):
 @pytest.fixture(scope="module", autouse=True)
 def report(request):
     yield
-    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
-    capture = request.config.pluginmanager.get_plugin("capturemanager")
-    if reporter is None or capture is None or not _MEDIANS:
-        return
-    with capture.global_and_fixture_disabled():
-        reporter.write_line("\nengine medians (ratios to fuzzcore in the same group):")
-        for group, medians in _MEDIANS.items():
-            ours = medians.get("fuzzcore")
-            reporter.write_line(f"  {group}")
-            for name, t in medians.items():
-                ratio = f"  x{t / ours:,.1f}" if ours else ""
-                reporter.write_line(f"    {name:24s} {t * 1e6:14,.3f} us{ratio}")
+    lines = []
+    for group, medians in _MEDIANS.items():
+        ours = medians.get("fuzzcore")
+        lines.append(f"  {group}")
+        for name, t in medians.items():
+            ratio = f"  x{t / ours:,.1f}" if ours else ""
+            lines.append(f"    {name:24s} {t * 1e6:14,.3f} us{ratio}")
+    write_report(request, "engine medians (ratios to fuzzcore in the same group):", lines)
 
 
 def _record(benchmark, group, name):

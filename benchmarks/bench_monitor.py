@@ -25,10 +25,10 @@ import subprocess
 import sys
 import textwrap
 
-import cv2
 import numpy as np
 import pytest
 
+from reporting import single_cv2_thread, write_report
 import fuzzcore
 from monitor.depth.prior import build_prior
 from monitor.depth.retrieval import Retriever, retrieve
@@ -71,23 +71,16 @@ _SCRIPT = textwrap.dedent("""
 
 @pytest.fixture(scope="module", autouse=True)
 def one_thread_and_report(request):
-    previous = cv2.getNumThreads()
-    cv2.setNumThreads(1)
-    yield
-    cv2.setNumThreads(previous)
-    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
-    capture = request.config.pluginmanager.get_plugin("capturemanager")
-    if reporter is not None and capture is not None and _MEDIANS:
-        with capture.global_and_fixture_disabled():
-            reporter.write_line("\nmonitor step, 1600x900, one thread:")
-            for name, seconds in _MEDIANS.items():
-                reporter.write_line(f"  {name}: {1e3 * seconds:.3f} ms")
-            if {"first_frame", "steady_state"} <= set(_MEDIANS):
-                reporter.write_line(f"  first frame / steady-state median = "
-                                    f"{_MEDIANS['first_frame'] / _MEDIANS['steady_state']:.2f}x")
-            if {"one_shot_retrieve", "retriever"} <= set(_MEDIANS):
-                reporter.write_line(f"  one-shot retrieve / Retriever = "
-                                    f"{_MEDIANS['one_shot_retrieve'] / _MEDIANS['retriever']:.2f}x")
+    with single_cv2_thread():
+        yield
+    lines = [f"  {name}: {1e3 * seconds:.3f} ms" for name, seconds in _MEDIANS.items()]
+    if {"first_frame", "steady_state"} <= set(_MEDIANS):
+        lines.append(f"  first frame / steady-state median = "
+                     f"{_MEDIANS['first_frame'] / _MEDIANS['steady_state']:.2f}x")
+    if {"one_shot_retrieve", "retriever"} <= set(_MEDIANS):
+        lines.append(f"  one-shot retrieve / Retriever = "
+                     f"{_MEDIANS['one_shot_retrieve'] / _MEDIANS['retriever']:.2f}x")
+    write_report(request, "monitor step, 1600x900, one thread:", lines if _MEDIANS else [])
 
 
 @pytest.fixture(scope="module")

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from reporting import write_report
 from monitor.cli import main
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
@@ -47,19 +48,13 @@ def recording(tmp_path_factory):
 @pytest.fixture(scope="module", autouse=True)
 def report(request):
     yield
-    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
-    capture = request.config.pluginmanager.get_plugin("capturemanager")
     lines = [f"  {name}: median {t:.2f} s per run, {FRAMES / t:.1f} frames/s" for name, t in _MEDIANS.items()]
     if {"workers_1", "workers_2"} <= set(_MEDIANS):
         lines.append(f"  scaling 1 -> 2 workers: {_MEDIANS['workers_1'] / _MEDIANS['workers_2']:.2f}x")
     if _SHARE:
         lines.append(f"  the monitor's stages per frame: median {_SHARE[0]:.1f} ms = "
                      f"{100 * _SHARE[0] / (1e3 / HZ):.0f}% of a {HZ:g} Hz frame budget ({1e3 / HZ:.1f} ms)")
-    if reporter is not None and capture is not None and lines:
-        with capture.global_and_fixture_disabled():
-            reporter.write_line(f"\nfuzzrisk monitor on {FRAMES} depth maps (1600x900):")
-            for line in lines:
-                reporter.write_line(line)
+    write_report(request, f"fuzzrisk monitor on {FRAMES} depth maps (1600x900):", lines)
 
 
 def _run(recording, out: Path, workers: int) -> None:

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 import pytest
 
+from reporting import single_cv2_thread, write_report
 from monitor.depth import _retrieval_kernels as kernels
 from monitor.geometry.boxes import within_range
 from monitor.depth.prior import build_prior
@@ -32,21 +33,13 @@ _MEDIANS: dict[str, float] = {}
 
 @pytest.fixture(scope="module", autouse=True)
 def one_thread_and_report(request):
-    previous = cv2.getNumThreads()
-    cv2.setNumThreads(1)
-    yield
-    cv2.setNumThreads(previous)
-    reporter = request.config.pluginmanager.get_plugin("terminalreporter")
+    with single_cv2_thread():
+        yield
     lines = [f"  {name}: median {1e3 * t:.3f} ms" for name, t in _MEDIANS.items()]
     for fused, straight in (("retrieve_fused", "retrieve_numpy"), ("foreground_fused", "foreground_numpy")):
         if fused in _MEDIANS and straight in _MEDIANS:
             lines.append(f"  {straight} / {fused} = {_MEDIANS[straight] / _MEDIANS[fused]:.2f}x")
-    capture = request.config.pluginmanager.get_plugin("capturemanager")
-    if reporter is not None and capture is not None and lines:
-        with capture.global_and_fixture_disabled():  # teardown output is captured otherwise
-            reporter.write_line("\nretrieval medians (1600x900, one thread):")
-            for line in lines:
-                reporter.write_line(line)
+    write_report(request, "retrieval medians (1600x900, one thread):", lines)
 
 
 @pytest.fixture(scope="module")
