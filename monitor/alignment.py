@@ -4,9 +4,21 @@ FuzzRisk, Sec. III-A ("Measuring alignment with object detector predictions"): t
 Hungarian algorithm pairs S with P on the distance between box centres; each pair gets
 IoU and RDD; a pair counts only when ``IoU > alpha`` and ``|RDD| < beta``; an S without a
 counted pair scores IoU = 0 and RDD = 1; the frame's features are the means over S,
-IoU~ and RDD~. ``weighting="inverse_distance"`` makes them means weighted by ``1 / d`` of
-each S (an object at 5 m counts four times one at 20 m: the nearer matters more to a car
-about to reach it); ``"mean"`` is the paper's plain mean.
+IoU~ and RDD~. This is ``matching="hungarian"``.
+
+``matching="coverage"`` asks of each S what USC asks of each ground truth: how much of it
+the detections cover. The P that take part for an S are those not placed much farther
+than it, ``RDD < beta`` (one-sided: a detection nearer than S is cautious, as USC's depth
+ratio ``min(1, d_G / d_P)`` treats it); the S's overlap term is the share of its box inside
+the union of their boxes (its IoG by the detections), its RDD that of the one overlapping
+it most; it counts when that share is ``> alpha``. Unlike one-to-one pairs on box centres,
+this is not thrown by a depth view that merges two neighbours into one object (each half
+covered by its own detection) or splits one object into parts (each part inside the same
+detection), which a view on an estimated depth map does all the time.
+
+``weighting="inverse_distance"`` makes the features means weighted by ``1 / d`` of each S
+(an object at 5 m counts four times one at 20 m: the nearer matters more to a car about
+to reach it); ``"mean"`` is the paper's plain mean.
 
 A frame without safety-critical objects (empty S) has no features: its means are NaN
 (:attr:`Alignment.n_objects` is 0). The caller must check; the NaN is there so that
@@ -30,6 +42,8 @@ DEFAULT_BETA = 0.2
 #: How the per-object terms become the frame's features: the paper's plain mean over S, or
 #: the mean weighted by 1 / d (metres) of each S.
 WEIGHTINGS = ("mean", "inverse_distance")
+#: How S meets P: the paper's one-to-one pairs, or each S's coverage by the detections.
+MATCHINGS = ("hungarian", "coverage")
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,20 +54,25 @@ class Alignment:
     ----------
     partner : ndarray of shape (M,), int64
         Row of P the Hungarian assignment gave to each row of S; -1 when it gave none
-        (only when S has more rows than P).
+        (only when S has more rows than P). Coverage matching: the taking-part P that
+        overlaps the S most, -1 when none overlaps it.
     pair_iou : ndarray of shape (M,), float64
-        IoU of each S with its partner (0 where ``partner == -1``).
+        IoU of each S with its partner (0 where ``partner == -1``). Coverage matching: the
+        share of the S's box inside the union of the taking-part detections (its IoG).
     pair_rdd : ndarray of shape (M,), float64
         RDD of each S with its partner, ``min(1, (d_P - d_S) / d_S)`` (1 where
         ``partner == -1``).
     matched : ndarray of shape (M,), bool
-        The partner counts: ``pair_iou > alpha`` and ``|pair_rdd| < beta``.
+        The partner counts: ``pair_iou > alpha`` and ``|pair_rdd| < beta`` (coverage
+        matching: ``pair_iou > alpha``, the depth test having chosen the P).
     iou_mean : float
         IoU~, the mean over S of :attr:`iou`; NaN when S is empty.
     rdd_mean : float
         RDD~, the mean over S of :attr:`rdd`; NaN when S is empty.
     alpha, beta : float
         The thresholds used.
+    matching : str
+        One of :data:`MATCHINGS`.
     """
 
     partner: np.ndarray
@@ -64,6 +83,7 @@ class Alignment:
     rdd_mean: float
     alpha: float
     beta: float
+    matching: str = "hungarian"
 
     @property
     def n_objects(self) -> int:
@@ -146,8 +166,15 @@ def check_weighting(weighting) -> str:
     return weighting
 
 
+def check_matching(matching) -> str:
+    """Validate how S meets P (the one rule for it, also the configuration's)."""
+    if matching not in MATCHINGS:
+        raise ValueError(f"matching = {matching!r}, must be one of {', '.join(MATCHINGS)}")
+    return matching
+
+
 def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
-          weighting: str = "mean") -> Alignment:
+          weighting: str = "mean", matching: str = "hungarian") -> Alignment:
     """Align the safety-critical objects of one frame with the predictions.
 
     Parameters
@@ -158,12 +185,17 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     P : array_like of shape (N, 5)
         Predictions, rows ``cx, cy, w, h, d``; ``d >= 0`` metres.
     alpha : float
-        A pair counts only when its IoU is ``> alpha``; in ``[0, 1]``.
+        A pair counts only when its IoU (coverage matching: the S's covered share) is
+        ``> alpha``; in ``[0, 1]``.
     beta : float
-        A pair counts only when ``|RDD| < beta``; ``> 0``.
+        A pair counts only when ``|RDD| < beta`` (coverage matching: a P takes part only
+        when ``RDD < beta``); ``> 0``.
     weighting : str
         One of :data:`WEIGHTINGS`: ``"mean"`` (the paper) or ``"inverse_distance"`` (each S
         weighted by ``1 / d``).
+    matching : str
+        One of :data:`MATCHINGS`: ``"hungarian"`` (the paper) or ``"coverage"`` (see the
+        module docstring).
 
     Returns
     -------
@@ -174,28 +206,33 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     Raises
     ------
     ValueError
-        Invalid boxes (message names ``S`` or ``P``, the row and column), thresholds or
-        weighting.
+        Invalid boxes (message names ``S`` or ``P``, the row and column), thresholds,
+        weighting or matching.
     """
     alpha, beta = check_thresholds(alpha, beta)
     weighting = check_weighting(weighting)
+    matching = check_matching(matching)
     S = as_boxes(S, "S", positive_depth=True)
     P = as_boxes(P, "P")
-    partner = _assign(S, P)
     m = S.shape[0]
     pair_iou = np.empty(m)
     pair_rdd = np.empty(m)
     matched = np.empty(m, dtype=np.bool_)
-    iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
+    if matching == "coverage":
+        partner = np.empty(m, dtype=np.int64)
+        _k.score_coverage(S, P, alpha, beta, partner, pair_iou, pair_rdd, matched)
+    else:
+        partner = _assign(S, P)
+        iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
-    elif weighting == "inverse_distance":
-        w = 1.0 / S[:, 4]
+    elif weighting == "inverse_distance" or matching == "coverage":
+        w = 1.0 / S[:, 4] if weighting == "inverse_distance" else np.ones(m)
         scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
         iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
     else:
         iou_mean, rdd_mean = iou_sum / m, rdd_sum / m
-    return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta)
+    return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta, matching)
 
 
 def warmup() -> None:
@@ -204,4 +241,5 @@ def warmup() -> None:
     Call once before a real-time loop so that its first frame does not pay the compile.
     """
     S = np.array([[10.0, 10.0, 4.0, 4.0, 5.0], [30.0, 10.0, 4.0, 4.0, 8.0]])
-    align(S, S[:1])
+    for matching in MATCHINGS:
+        align(S, S[:1], matching=matching)

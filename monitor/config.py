@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from fuzzcore import strict_yaml
-from monitor.alignment import DEFAULT_ALPHA, DEFAULT_BETA, check_thresholds, check_weighting
+from monitor.alignment import DEFAULT_ALPHA, check_matching, check_thresholds, check_weighting
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 from monitor.depth.visibility import VisibilityParams
@@ -66,23 +66,26 @@ def _set(obj, name: str, value: Any) -> None:
 
 @dataclass(frozen=True)
 class AlignmentConfig:
-    """Matching thresholds: a pair counts if IoU > alpha and |RDD| < beta; and how the
-    per-object terms become IoU~ and RDD~ (``weighting``, one of
+    """How S meets P (``matching``, one of :data:`monitor.alignment.MATCHINGS`), the
+    thresholds alpha and beta (their meaning per matching: :func:`monitor.alignment.align`),
+    and how the per-object terms become IoU~ and RDD~ (``weighting``, one of
     :data:`monitor.alignment.WEIGHTINGS`).
 
-    The rules for their values are :func:`monitor.alignment.check_thresholds` and
-    :func:`monitor.alignment.check_weighting`.
+    The rules for their values are :func:`monitor.alignment.check_thresholds`,
+    :func:`monitor.alignment.check_weighting` and :func:`monitor.alignment.check_matching`.
     """
 
     alpha: float = DEFAULT_ALPHA
-    beta: float = DEFAULT_BETA
-    weighting: str = "inverse_distance"
+    beta: float = 1.0
+    weighting: str = "mean"
+    matching: str = "coverage"
 
     def __post_init__(self):
         alpha, beta = check_thresholds(self.alpha, self.beta)
         _set(self, "alpha", alpha)
         _set(self, "beta", beta)
         check_weighting(self.weighting)
+        check_matching(self.matching)
 
 
 @dataclass(frozen=True)

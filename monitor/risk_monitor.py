@@ -327,7 +327,7 @@ class RiskMonitor:
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
         chosen = self.config.alignment
-        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting)
+        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:

@@ -231,3 +231,99 @@ def test_features_bounded(S, P, alpha, beta):
     assert np.all((a.pair_rdd >= -1.0) & (a.pair_rdd <= 1.0))
     assert np.all((a.pair_iou >= 0.0) & (a.pair_iou <= 1.0))
     assert a.iou_mean == pytest.approx(a.iou.mean()) and a.rdd_mean == pytest.approx(a.rdd.mean())
+
+
+# ------------------------------------------------------------------ coverage matching
+
+def test_coverage_of_a_hand_made_frame():
+    S = np.array([[100, 100, 40, 20, 10.0],    # x [80, 120], y [90, 110], area 800
+                  [300, 100, 20, 20, 8.0],     # x [290, 310], area 400
+                  [500, 100, 20, 20, 5.0]])    # x [490, 510]: no detection near it
+    P = np.array([[85, 100, 30, 20, 9.0],      # x [70, 100]: covers S0's x [80, 100] -> 400
+                  [115, 105, 30, 10, 12.0],    # x [100, 130], y [100, 110]: S0's x [100, 120] x 10 -> 200
+                  [110, 100, 10, 20, 30.0],    # RDD (30 - 10) / 10 -> 1: too far, takes no part
+                  [310, 100, 30, 40, 20.0]])   # x [295, 325]: S1 x [295, 310] -> 300, but RDD 1.5 -> 1
+    a = align(S, P, alpha=0.3, beta=1.0, matching="coverage")
+    # S0: P0 and P1 take part, their parts inside S0 do not overlap: (400 + 200) / 800 = 0.75;
+    #     P0 overlaps S0 most (400 > 200): RDD (9 - 10) / 10 = -0.1
+    # S1: its only overlapping detection is 20 m away against 8 m: nothing takes part
+    # S2: nothing near it
+    np.testing.assert_array_equal(a.partner, [0, -1, -1])
+    np.testing.assert_allclose(a.pair_iou, [0.75, 0.0, 0.0])
+    np.testing.assert_allclose(a.pair_rdd, [-0.1, 1.0, 1.0])
+    np.testing.assert_array_equal(a.matched, [True, False, False])
+    assert a.iou_mean == pytest.approx(0.75 / 3) and a.rdd_mean == pytest.approx((-0.1 + 2.0) / 3)
+    assert a.matching == "coverage"
+    # a looser depth test lets P3 cover S1: 300 / 400, its RDD clipped to 1
+    loose = align(S, P, alpha=0.3, beta=2.0, matching="coverage")
+    np.testing.assert_allclose(loose.pair_iou[1], 0.75)
+    assert loose.pair_rdd[1] == 1.0 and loose.matched[1]
+    # inverse-distance weights 1/10, 1/8, 1/5 (sum 0.425)
+    weighted = align(S, P, alpha=0.3, beta=1.0, weighting="inverse_distance", matching="coverage")
+    assert weighted.iou_mean == pytest.approx(0.1 * 0.75 / 0.425)
+    assert weighted.rdd_mean == pytest.approx((0.1 * -0.1 + 0.125 + 0.2) / 0.425)
+
+
+def test_coverage_counts_overlapping_detections_once_and_is_not_thrown_by_merges():
+    S = np.array([[100, 100, 40, 20, 10.0]])           # two cars side by side, merged into one S
+    halves = np.array([[90, 100, 20, 20, 10.0], [110, 100, 20, 20, 10.5]])
+    assert align(S, halves, beta=1.0, matching="coverage").pair_iou[0] == pytest.approx(1.0)
+    # the paper's pairs see one half at IoU 0.5 and leave the other detection unused
+    assert align(S, halves).pair_iou[0] == pytest.approx(0.5)
+    same = np.array([[100, 100, 40, 20, 10.0], [100, 100, 40, 20, 10.0], [95, 100, 30, 20, 10.0]])
+    assert align(S, same, beta=1.0, matching="coverage").pair_iou[0] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="matching = 'greedy', must be one of hungarian, coverage"):
+        align(S, halves, matching="greedy")
+
+
+def _coverage_reference(S, P, alpha, beta, step=0.25):
+    """Covered share by counting the centres of a fine grid of cells inside S."""
+    cov, rdd, matched = [], [], []
+    for s in S:
+        x0, x1, y0, y1 = s[0] - s[2] / 2, s[0] + s[2] / 2, s[1] - s[3] / 2, s[1] + s[3] / 2
+        xs = np.arange(x0 + step / 2, x1, step)
+        ys = np.arange(y0 + step / 2, y1, step)
+        X, Y = np.meshgrid(xs, ys)
+        inside = np.zeros(X.shape, bool)
+        best, best_inter = -1, 0.0
+        for j, p in enumerate(P):
+            if not min(1.0, (p[4] - s[4]) / s[4]) < beta:
+                continue
+            inside |= (np.abs(X - p[0]) < p[2] / 2) & (np.abs(Y - p[1]) < p[3] / 2)
+            iw = min(x1, p[0] + p[2] / 2) - max(x0, p[0] - p[2] / 2)
+            ih = min(y1, p[1] + p[3] / 2) - max(y0, p[1] - p[3] / 2)
+            if iw > 0 and ih > 0 and iw * ih > best_inter:
+                best, best_inter = j, iw * ih
+        c = inside.mean() if inside.size else 0.0
+        cov.append(c)
+        rdd.append(min(1.0, (P[best][4] - s[4]) / s[4]) if best >= 0 else 1.0)
+        matched.append(best >= 0 and c > alpha)
+    return np.array(cov), np.array(rdd), np.array(matched)
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_coverage_matches_a_grid_count(seed):
+    rng = np.random.default_rng(seed)
+    m, n = rng.integers(1, 5), rng.integers(0, 7)
+    # integer corners, so the grid's cell centres never lie on an edge and the count is exact
+    S = np.column_stack([rng.integers(0, 40, m) + 0.5 * (w := rng.integers(2, 20, m)),
+                         rng.integers(0, 20, m) + 0.5 * (h := rng.integers(2, 12, m)), w, h,
+                         rng.uniform(2, 20, m)]).astype(float)
+    P = np.column_stack([rng.integers(0, 40, n) + 0.5 * (w := rng.integers(2, 25, n)),
+                         rng.integers(0, 20, n) + 0.5 * (h := rng.integers(2, 15, n)), w, h,
+                         rng.uniform(1, 40, n)]).astype(float)
+    a = align(S, P, 0.3, 0.5, matching="coverage")
+    cov, rdd, matched = _coverage_reference(S, P, 0.3, 0.5)
+    np.testing.assert_allclose(a.pair_iou, cov, atol=1e-12)
+    np.testing.assert_allclose(a.pair_rdd, rdd, atol=1e-12)
+    np.testing.assert_array_equal(a.matched, matched)
+    assert a.iou_mean == pytest.approx(np.mean(np.where(matched, cov, 0.0)))
+    assert a.rdd_mean == pytest.approx(np.mean(np.where(matched, rdd, 1.0)))
+
+
+@given(_frames(), _frames(), st.floats(0, 1), st.floats(0.01, 2))
+def test_coverage_features_bounded(S, P, alpha, beta):
+    a = align(S, P, alpha, beta, matching="coverage")
+    assert 0.0 <= a.iou_mean <= 1.0 and -1.0 <= a.rdd_mean <= 1.0
+    assert np.all((a.pair_iou >= 0.0) & (a.pair_iou <= 1.0))
+    assert np.all((a.pair_rdd >= -1.0) & (a.pair_rdd <= 1.0))

@@ -47,7 +47,7 @@ def test_user_file_overrides_only_what_it_names(tmp_path):
     config = load_config(_write(tmp_path, "alignment: {alpha: 0.5}\nshield: {threshold: 0.6, release: 0.4}\n"
                                           "max_range: 30\nrisk:\n  fail_safe: 0.9\n"
                                           "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
-    assert config.alignment == AlignmentConfig(alpha=0.5, beta=0.2)
+    assert config.alignment == AlignmentConfig(alpha=0.5, beta=1.0, weighting="mean", matching="coverage")
     assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=0, deceleration=3.0)
     assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.5)
     assert config.detections == DetectionsConfig()
