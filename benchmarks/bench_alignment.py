@@ -8,7 +8,9 @@ Peers in the same run, on the same frame, answers checked before timing:
   floor no implementation of the paper's alignment can go under;
 - ``reference_loop``: ``scipy.spatial.distance.cdist`` + the assignment + a Python loop
   over the pairs (the straightforward implementation);
-- ``reference_numpy``: the same with the pair measures vectorised in NumPy.
+- ``reference_numpy``: the same with the pair measures vectorised in NumPy;
+- ``align_coverage``: the monitor's default matching (each S's share inside the union of
+  the detections' boxes, exact; ``monitor.alignment``), against the paper's pairs above.
 """
 import time
 
@@ -95,6 +97,14 @@ def test_align(benchmark, warm_up_seconds):
     benchmark.extra_info["warm_up_s"] = warm_up_seconds
     _check_answers()
     benchmark(ours, S, P)
+
+
+@pytest.mark.benchmark(group="align 50 S x 50 P", warmup=True)
+def test_align_coverage(benchmark, warm_up_seconds):
+    a = alignment.align(S, P, ALPHA, 1.0, matching="coverage")
+    # 40 predictions lie on their objects: those objects are mostly covered
+    assert 30 < a.matched.sum() <= 50 and np.all((a.pair_iou >= 0) & (a.pair_iou <= 1))
+    benchmark(alignment.align, S, P, ALPHA, 1.0, "mean", "coverage")
 
 
 @pytest.mark.benchmark(group="align 50 S x 50 P", warmup=True)

@@ -220,14 +220,14 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     matched = np.empty(m, dtype=np.bool_)
     if matching == "coverage":
         partner = np.empty(m, dtype=np.int64)
-        _k.score_coverage(S, P, alpha, beta, partner, pair_iou, pair_rdd, matched)
+        iou_sum, rdd_sum = _k.score_coverage(S, P, alpha, beta, partner, pair_iou, pair_rdd, matched)
     else:
         partner = _assign(S, P)
         iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
-    elif weighting == "inverse_distance" or matching == "coverage":
-        w = 1.0 / S[:, 4] if weighting == "inverse_distance" else np.ones(m)
+    elif weighting == "inverse_distance":
+        w = 1.0 / S[:, 4]
         scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
         iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
     else:

@@ -31,7 +31,7 @@ from monitor.synthetic import CONDITIONS, generate_frames
 STAGES = {
     "retrieval": "depth view: safety-critical objects S from the depth map",
     "projection": "detector view: 3D detections projected to P",
-    "alignment": "Hungarian alignment of S to P, IoU~ and RDD~",
+    "alignment": "alignment of S with P (coverage or Hungarian pairs), IoU~ and RDD~",
     "inference": "risk = FIS(IoU~, RDD~) (frames with objects only)",
     "step": "RiskMonitor.step, the whole call",
 }

@@ -63,8 +63,9 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     Fields: ``scene``, ``frame`` (index), ``key`` (file stem), ``token`` (nuScenes sample or
     null), ``time`` (s), then the monitor's report (``risk``, ``status``, ``reason``,
     ``iou``, ``rdd``, ``S``, ``P``, ``matched``, ``fired``, ``timings_ms``: see
-    :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (per S: ``partner`` row of
-    P or -1, ``iou``, ``rdd``, ``counted``), ``target`` (1 - USC~; null without ground truth
+    :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
+    ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
+    ``counted``), ``target`` (1 - USC~; null without ground truth
     or none in range) and ``shield`` (``engaged``, ``deceleration`` m/s^2). An unprocessed
     frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
@@ -76,8 +77,9 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
                 "shield": None}
     report = ob.report
     a = report.alignment
-    alignment = None if a is None else {"partner": a.partner.tolist(), "iou": a.pair_iou.tolist(),
-                                        "rdd": a.pair_rdd.tolist(), "counted": a.matched.tolist()}
+    alignment = None if a is None else {"matching": a.matching, "partner": a.partner.tolist(),
+                                        "iou": a.pair_iou.tolist(), "rdd": a.pair_rdd.tolist(),
+                                        "counted": a.matched.tolist()}
     target = _number(ob.target) if result.has_ground_truth else None
     return {**row, **report.to_dict(), "alignment": alignment, "target": target,
             "shield": {"engaged": engaged, "deceleration": deceleration}}

@@ -390,3 +390,23 @@ def test_a_frame_the_geometric_view_calls_blind_has_no_view(geometric_monitor, s
     report = geometric_monitor.step(depth, PEDESTRIAN)
     assert report.status == NO_VIEW and report.risk == geometric_monitor.config.risk.no_view
     assert "under the road plane" in report.reason and len(report.P) == 1 and len(report.S) == 0
+
+
+def test_coverage_reads_a_detected_group_as_covered_where_pairs_read_a_miss(fis, prior):
+    # four pedestrians abreast 9 m ahead, 0.05 m apart: the geometric view sees one object
+    # (its ground grid's 0.3 m cells do not split them); the detector reports each one
+    group = np.array([[9.0, y, 0.9, 0.7, 0.7, 1.8, 0.0] for y in (1.125, 0.375, -0.375, -1.125)])
+    depth = _depth(group)
+    covering = RiskMonitor(fis, prior, CAMERA, MonitorConfig())  # the shipped coverage matching
+    report = covering.step(depth, group)
+    assert report.status == OK and len(report.S) == 1 and len(report.P) == 4
+    # the four detections fill the merged box but for the gaps and the 0.2 m under the
+    # height band: covered, the boxes' depths agree, so "iou high, rdd medium -> risk low"
+    assert report.iou > 0.9 and abs(report.rdd) < 0.01 and report.risk < 0.35
+    # the paper's one-to-one pairs give the group one pedestrian's box: IoU about 1/4 < 0.3,
+    # so the group counts as missed and the risk is the rule base's worst
+    pairs = replace(MonitorConfig(), alignment=replace(MonitorConfig().alignment, matching="hungarian",
+                                                       beta=0.2))
+    paired = RiskMonitor(fis, prior, CAMERA, pairs).step(depth, group)
+    assert 0.2 < paired.alignment.pair_iou[0] < 0.3 and not paired.alignment.matched[0]
+    assert paired.iou == 0.0 and paired.rdd == 1.0 and paired.risk > 0.75
