@@ -188,12 +188,29 @@ class ShieldConfig:
         Frames to stay engaged after the last frame above ``threshold``.
     deceleration : float > 0
         Requested deceleration while engaged, m/s^2.
+    path_half_width : float > 0 or None
+        None: the paper's shield, the risk alone decides. A number (metres): the risk
+        engages the shield only while a depth-view object no detection covers stands in the
+        ego's path (laterally within this of the ego's centreline) within its reach
+        (:meth:`monitor.shield.Shield.reach`); frames without a view are not gated.
+    headway : float >= 0
+        Seconds of travel the reach adds to the braking distance (the delay from frame to
+        brakes, and then some).
+    margin : float >= 0
+        Metres the reach adds beyond that.
+    front : float >= 0
+        Metres from the ego origin (nuScenes': the rear axle) to the front bumper, where the
+        reach starts.
     """
 
     threshold: float = 0.5
     release: float = 0.5
     hold_frames: int = 0
     deceleration: float = 3.0
+    path_half_width: float | None = None
+    headway: float = 0.5
+    margin: float = 2.0
+    front: float = 3.8
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -208,6 +225,17 @@ class ShieldConfig:
         if not (math.isfinite(deceleration) and deceleration > 0):
             raise ValueError(f"deceleration = {self.deceleration!r}, must be > 0 m/s^2")
         _set(self, "deceleration", deceleration)
+        if self.path_half_width is not None:
+            width = _number(self.path_half_width, "path_half_width")
+            if not (math.isfinite(width) and width > 0):
+                raise ValueError(f"path_half_width = {self.path_half_width!r}, must be > 0 metres "
+                                 "(or null: no path gate)")
+            _set(self, "path_half_width", width)
+        for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
+            value = _number(getattr(self, name), name)
+            if not (math.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} = {getattr(self, name)!r}, must be >= 0 {unit}")
+            _set(self, name, value)
 
 
 @dataclass(frozen=True)

@@ -104,6 +104,13 @@ class RiskReport:
         The geometric view's free distance ahead in the corridor, metres from the ego
         origin: inf when nothing stands in it within range; NaN for the paper's view (which
         does not measure it) and for frames without a view (``invalid-input``, ``no-view``).
+    unseen : ndarray of shape (k, 3) or None
+        Where the depth-view objects no detection covers (``alignment.matched`` False)
+        stand: per object ``x, y_min, y_max`` in the ego frame, metres (the geometric view's
+        :attr:`~monitor.depth.geometric.GeometricView.extents`; for the paper's view
+        :meth:`~monitor.geometry.camera.Camera.ground_extents`); (0, 3) when the view found
+        nothing; None for frames without a view (``invalid-input``, ``no-view``). The
+        path-gated shield reads it (:class:`monitor.shield.Shield`).
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
         ``alignment``, ``inference``.
@@ -119,6 +126,7 @@ class RiskReport:
     alignment: Alignment | None = None
     fired: list = field(default_factory=list)
     free_distance: float = float("nan")
+    unseen: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -131,6 +139,7 @@ class RiskReport:
             "matched": [] if self.alignment is None else self.alignment.partner.tolist(),
             "fired": [{"rule": r + 1, "text": t, "strength": s} for r, t, s in self.fired],
             "free_distance": None if np.isnan(self.free_distance) else self.free_distance,
+            "unseen": None if self.unseen is None else self.unseen.tolist(),
             "timings_ms": {k: 1e3 * v for k, v in self.timings.items()},
         }
 
@@ -224,18 +233,21 @@ class RiskMonitor:
         centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
         return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
 
-    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, float, str]:
-        """S, the free distance ahead (NaN for the paper's view) and why the view cannot see
-        through the frame ("" when it can)."""
+    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, str]:
+        """S, where each S stands in the ego frame (``x, y_min, y_max``: the geometric view
+        measures it from its points, the paper's is back-projected from the box), the free
+        distance ahead (NaN for the paper's view) and why the view cannot see through the
+        frame ("" when it can)."""
         if isinstance(self._retriever, GeometricRetriever):
             try:
                 view = self._retriever.view(depth)
             except BlindViewError as exc:
-                return np.zeros((0, 5)), float("nan"), str(exc)
-            S, free = view.boxes, view.free_distance
+                return np.zeros((0, 5)), np.zeros((0, 3)), float("nan"), str(exc)
+            S, extents, free = view.boxes, view.extents, view.free_distance
         else:
             S, free = self._retriever(depth), float("nan")
-        return S, free, check_view(depth, self._visibility)
+            extents = self.camera.ground_extents(S)
+        return S, extents, free, check_view(depth, self._visibility)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -318,7 +330,7 @@ class RiskMonitor:
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
-            S, free, blind = self._depth_view(depth)
+            S, extents, free, blind = self._depth_view(depth)
         except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
@@ -328,6 +340,7 @@ class RiskMonitor:
         timings["projection"] = t2 - t1
         chosen = self.config.alignment
         alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching)
+        unseen = extents[~alignment.matched]
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:
@@ -339,7 +352,8 @@ class RiskMonitor:
                               reason=f"no safety-critical object within {self.config.max_range:g} m"
                                      f"{seen}: risk.no_objects = {self.config.risk.no_objects:g}, the "
                                      "configured risk of an empty view (not a measured zero)",
-                              S=S, P=P, alignment=alignment, free_distance=free, timings=timings)
+                              S=S, P=P, alignment=alignment, free_distance=free, unseen=unseen,
+                              timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
         if self.explain:  # one inference either way: the explanation carries the output
@@ -353,6 +367,7 @@ class RiskMonitor:
                               reason=f"no rule of {self.fis.name!r} fired for IoU~ = {iou:.6g}, "
                                      f"RDD~ = {rdd:.6g}: the rule base has no answer there",
                               iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, free_distance=free,
-                              timings=timings)
+                              unseen=unseen, timings=timings)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
-                          alignment=alignment, fired=fired, free_distance=free, timings=timings)
+                          alignment=alignment, fired=fired, free_distance=free, unseen=unseen,
+                          timings=timings)

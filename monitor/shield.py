@@ -9,14 +9,27 @@ noisy risk stream:
 - a hold: it stays engaged at least ``hold_frames`` frames after the last frame above the
   threshold.
 
-A NaN risk is never "below the threshold": it engages the shield (the monitor never
-produces one; this guards other risk sources).
+And one against braking for what is not in the way (``path_half_width``): the monitor's risk
+says how much of what the depth view sees the detector misses, anywhere in its corridor, and
+a detector calibrated to real data misses half of the traffic around the car in most
+frames. With a path gate the risk engages the shield only while one of those missed objects
+(a depth-view object no detection covers, :attr:`monitor.RiskReport.unseen`) stands in the
+ego's path within its reach, the distance it needs to stop at the shield's deceleration plus
+a headway and a margin, and it releases (after the hold) when none is left there: as the car
+itself brakes for a detected obstacle in its path within its stopping distance, the shield
+brakes for an unseen one. A frame without a view (``unseen`` None: an invalid frame or one
+the view cannot see through) is not gated: its fail-safe risk engages the shield as before.
+
+A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
+monitor never produces one; this guards other risk sources).
 """
 from __future__ import annotations
 
 import math
 import numbers
 from dataclasses import dataclass
+
+import numpy as np
 
 from monitor.config import ShieldConfig
 
@@ -59,16 +72,52 @@ class Shield:
         self.engaged = False
         self._since_trigger = 0
 
-    def update(self, risk: float) -> ShieldDecision:
-        """The decision for the next frame's risk (a real number; NaN engages)."""
+    def reach(self, speed: float) -> float:
+        """Metres ahead of the front bumper in which an unseen object counts at ``speed``
+        m/s: the braking distance at the shield's deceleration, plus ``headway`` seconds of
+        travel and the ``margin``."""
+        c = self.config
+        return speed * speed / (2.0 * c.deceleration) + speed * c.headway + c.margin
+
+    def update(self, risk: float, speed: float | None = None, unseen=None) -> ShieldDecision:
+        """The decision for the next frame.
+
+        Parameters
+        ----------
+        risk : float
+            The monitor's risk (a real number; NaN engages).
+        speed : float, optional
+            The ego's speed, m/s (>= 0); needed with a path gate, ignored without.
+        unseen : ndarray of shape (k, 3) or None
+            The report's :attr:`~monitor.RiskReport.unseen` (``x, y_min, y_max`` per object,
+            ego frame, metres); None for a frame without a view. Read only with a path gate.
+        """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        if math.isnan(risk) or risk > c.threshold:
+        in_path = c.path_half_width is None or self._in_path(speed, unseen)
+        if math.isnan(risk) or (risk > c.threshold and in_path):
             self.engaged, self._since_trigger = True, 0
         elif self.engaged:
             self._since_trigger += 1
-            if risk <= c.release and self._since_trigger > c.hold_frames:
+            if (risk <= c.release or not in_path) and self._since_trigger > c.hold_frames:
                 self.engaged = False
         return ShieldDecision(self.engaged, c.deceleration if self.engaged else 0.0, risk)
+
+    def _in_path(self, speed, unseen) -> bool:
+        """An unseen object in the path within reach, or no view to tell (True)."""
+        if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
+                or not math.isfinite(speed):
+            raise ValueError(f"speed = {speed!r}: a shield with a path gate needs the ego's speed, "
+                             "a finite number of m/s >= 0")
+        if unseen is None:
+            return True
+        unseen = np.asarray(unseen, dtype=np.float64)
+        if unseen.ndim != 2 or unseen.shape[1] != 3 or not np.isfinite(unseen).all():
+            raise ValueError(f"unseen has shape {unseen.shape}: expected finite (k, 3) rows "
+                             "x, y_min, y_max (RiskReport.unseen)")
+        w = self.config.path_half_width
+        x, y_min, y_max = unseen.T
+        ahead = x - self.config.front
+        return bool(np.any((ahead <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)))

@@ -74,10 +74,11 @@ def _jobs(kinds, conditions, n, seed):
 
 
 def sweep_settings(default):
-    """The shield settings of the sweep (ShieldConfig), the default's deceleration in all."""
-    from monitor.config import ShieldConfig
+    """The shield settings of the sweep (ShieldConfig): threshold, release and hold vary, the
+    rest (deceleration, path gate) is the default's."""
+    from dataclasses import replace
 
-    return [ShieldConfig(t, round(t - gap, 10), hold, default.deceleration)
+    return [replace(default, threshold=t, release=round(t - gap, 10), hold_frames=hold)
             for t in SWEEP_THRESHOLDS for gap, hold in SWEEP_HYSTERESIS]
 
 

@@ -350,19 +350,34 @@ def clear_structure(xs, ys, tall, x0, y0, cell, marks, obstacle, corridor):
 
 
 @kernel
-def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
-    """Per component: its extent, sizes, nearest corridor point and a robust depth.
+def _percentile(values, percentile):
+    """The ``percentile`` (0..100, linear interpolation as numpy's default) of a non-empty
+    1-D array, by selection (O(size)); reorders ``values``."""
+    size = values.size
+    pos = percentile / 100.0 * (size - 1)
+    lo = int(math.floor(pos))
+    segment = np.partition(values, lo)
+    low = segment[lo]
+    high = segment[lo + 1:].min() if lo + 1 < size else low  # the smallest above it
+    return low + (high - low) * (pos - lo)
+
+
+@kernel
+def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile, side_percentile):
+    """Per component: its extent, sizes, nearest corridor point, a robust depth and a
+    robust lateral span.
 
     ``labels`` int32 (rows, cols) from :func:`label_objects` with ``n`` components;
-    ``corridor`` uint8, ``ds`` and ``xs`` float32 (rows, cols). Returns float64 (n, 8) rows
-    ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth``: the first and last
-    block row and column, the number of blocks and of those inside the corridor, the
-    smallest ego x of those (inf if none), and, for components with at least
-    ``min_points`` blocks inside the corridor, the ``percentile`` (0..100, linear
-    interpolation as numpy's default) of the blocks' depths; NaN for the others.
+    ``corridor`` uint8, ``ds``, ``xs`` and ``ys`` float32 (rows, cols). Returns float64
+    (n, 10) rows ``r0, r1, c0, c1, blocks, corridor_blocks, corridor_x_min, depth, y_low,
+    y_high``: the first and last block row and column, the number of blocks and of those
+    inside the corridor, the smallest ego x of those (inf if none), and, for components
+    with at least ``min_points`` blocks inside the corridor, the ``percentile`` (0..100,
+    linear interpolation as numpy's default) of the blocks' depths and the
+    ``side_percentile`` and ``100 - side_percentile`` of their ego y; NaN for the others.
     """
     rows, cols = ds.shape
-    stats = np.empty((n, 8))
+    stats = np.empty((n, 10))
     for m in range(n):
         stats[m, 0] = rows
         stats[m, 1] = -1.0
@@ -372,6 +387,8 @@ def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
         stats[m, 5] = 0.0
         stats[m, 6] = np.inf
         stats[m, 7] = np.nan
+        stats[m, 8] = np.nan
+        stats[m, 9] = np.nan
     for r in range(rows):
         for col in range(cols):
             m = labels[r, col]
@@ -390,23 +407,21 @@ def object_stats(labels, n, corridor, ds, xs, min_points, percentile):
     for m in range(n):
         kept = stats[m, 5] >= min_points
         start[m + 1] = start[m] + (int(stats[m, 4]) if kept else 0)
-    values = np.empty(start[n], dtype=np.float64)
+    depths = np.empty(start[n], dtype=np.float64)
+    sides = np.empty(start[n], dtype=np.float64)
     fill = start[:n].copy()
     for r in range(rows):
         for col in range(cols):
             m = labels[r, col]
             if m >= 0 and stats[m, 5] >= min_points:
-                values[fill[m]] = ds[r, col]
+                depths[fill[m]] = ds[r, col]
+                sides[fill[m]] = ys[r, col]
                 fill[m] += 1
     for m in range(n):
-        size = start[m + 1] - start[m]
-        if size == 0:
+        if start[m + 1] == start[m]:
             continue
-        pos = percentile / 100.0 * (size - 1)
-        lo = int(math.floor(pos))
-        # order statistic lo by selection (O(size)); the next one is the smallest above it
-        segment = np.partition(values[start[m]:start[m + 1]], lo)
-        low = segment[lo]
-        high = segment[lo + 1:].min() if lo + 1 < size else low
-        stats[m, 7] = low + (high - low) * (pos - lo)
+        stats[m, 7] = _percentile(depths[start[m]:start[m + 1]], percentile)
+        side = sides[start[m]:start[m + 1]]
+        stats[m, 8] = _percentile(side, side_percentile)
+        stats[m, 9] = _percentile(side, 100.0 - side_percentile)
     return stats

@@ -251,6 +251,11 @@ class GeometricView:
     boxes : ndarray of shape (m, 5), float64
         The objects S: rows ``cx, cy, w, h, d`` (pixels, metres), nearest first; (0, 5) if
         none.
+    extents : ndarray of shape (m, 3), float64
+        Where each object stands in the ego frame, from its blocks: ``x`` its nearest
+        corridor block's ego x, ``y_min, y_max`` the ``depth_percentile`` and the
+        ``100 - depth_percentile`` percentile of its blocks' ego y (as robust to stray blocks
+        as its depth), metres; rows as ``boxes``.
     free_distance : float
         Ego x (metres, from the ego origin) of the nearest obstacle block of an object
         inside the corridor; inf when no object is there within ``max_range``.
@@ -271,6 +276,7 @@ class GeometricView:
     """
 
     boxes: np.ndarray
+    extents: np.ndarray
     free_distance: float
     ground: np.ndarray
     ground_fitted: bool
@@ -430,8 +436,8 @@ class GeometricRetriever:
                                     scratch.grid, scratch.obstacle, scratch.corridor)
         n = kernels.label_objects(xs, ys, scratch.obstacle, *self._grid_origin, params.cell_size,
                                   scratch.grid, scratch.grid_ids, scratch.labels)
-        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, params.min_points,
-                                     params.depth_percentile)
+        stats = kernels.object_stats(scratch.labels, n, scratch.corridor, ds, xs, ys, params.min_points,
+                                     params.depth_percentile, params.depth_percentile)
         s = params.stride
         x0, y0 = stats[:, 2] * s, stats[:, 0] * s
         x1 = np.minimum((stats[:, 3] + 1) * s, cam.width)
@@ -439,9 +445,10 @@ class GeometricRetriever:
         boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
         keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
             & (boxes[:, 3] >= params.min_size)
-        boxes = boxes[keep]
+        order = np.argsort(boxes[keep, 4], kind="stable")
         return GeometricView(
-            boxes=boxes[np.argsort(boxes[:, 4], kind="stable")],
+            boxes=boxes[keep][order],
+            extents=stats[keep][order][:, [6, 8, 9]],
             free_distance=float(stats[keep, 6].min()) if keep.any() else math.inf,
             ground=np.array(ground, dtype=np.float64),
             ground_fitted=support > 0,

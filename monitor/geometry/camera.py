@@ -141,6 +141,31 @@ class Camera:
                              f"of the camera) to project")
         return (p @ self.K[:2].T) / p[:, 2:3]
 
+    def ground_extents(self, boxes) -> np.ndarray:
+        """Where image boxes stand in the ego frame: their bottom edge back-projected at their depth.
+
+        Parameters
+        ----------
+        boxes : ndarray of shape (m, 5)
+            Image boxes ``cx, cy, w, h, d`` (pixels, metres), ``d`` the camera depth (z) of
+            the box's nearest part, as the depth views and ``project_boxes`` give it.
+
+        Returns
+        -------
+        ndarray of shape (m, 3)
+            Per box ``x, y_min, y_max``, metres in the ego frame: the forward distance of the
+            nearer of its two bottom corners, and the lateral span between them.
+        """
+        b = np.asarray(boxes, dtype=np.float64).reshape(-1, 5)
+        v = b[:, 1] + 0.5 * b[:, 3]
+        corners = [np.column_stack([(b[:, 0] + sign * 0.5 * b[:, 2] - self.K[0, 2]) / self.K[0, 0],
+                                    (v - self.K[1, 2]) / self.K[1, 1], np.ones(len(b))]) * b[:, 4:5]
+                   for sign in (-1.0, 1.0)]
+        left, right = (self.camera_to_ego(c) if len(b) else np.zeros((0, 3)) for c in corners)
+        return np.column_stack([np.minimum(left[:, 0], right[:, 0]),
+                                np.minimum(left[:, 1], right[:, 1]),
+                                np.maximum(left[:, 1], right[:, 1])])
+
     def same_as(self, other: "Camera") -> bool:
         """True when ``other`` has the same image size, near plane, intrinsics and mounting."""
         return (self.width == other.width and self.height == other.height

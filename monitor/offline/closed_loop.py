@@ -14,7 +14,8 @@ Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
    ``release_frames`` frames (a track coasts through missed detections); otherwise it
    accelerates back to its cruise speed at ``comfort``;
 3. a **shielded** driver is the same driver plus the :class:`~monitor.RiskMonitor` on the same
-   frame and a :class:`~monitor.shield.Shield`: the larger of the two decelerations wins;
+   frame and a :class:`~monitor.shield.Shield` (given the ego's speed and the report's unseen
+   objects, for a path-gated shield): the larger of the two decelerations wins;
 4. a command takes effect ``reaction`` seconds later (perception, decision and actuation).
 
 Drivers in one scenario (the baseline, the default shield, a sweep's settings) share the
@@ -235,10 +236,12 @@ HISTORY_KEYS = ("time", "speed", "gap", "risk", "engaged", "decel")
 
 
 def driver_label(config: ShieldConfig | None) -> str:
-    """``baseline`` or ``t{threshold} r{release} h{hold_frames}``."""
+    """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
+    for a path-gated shield."""
     if config is None:
         return BASELINE
-    return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}"
+    gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
+    return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 
 class Perception:
@@ -328,9 +331,10 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
         next_branches = []
         for world, group in branches:
             depth, dets, visible, distance = perception.frame(world, condition, streams[step])
-            risk = float("nan")
+            risk, unseen = float("nan"), None
             if any(m.shield is not None for m in group):
-                risk = monitor.step(depth, dets.boxes3d, dets.scores).risk
+                report = monitor.step(depth, dets.boxes3d, dets.scores)
+                risk, unseen = report.risk, report.unseen
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and distance <= max_range:
@@ -346,7 +350,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 decel = driver.brake if m.braking else 0.0
                 engaged = False
                 if m.shield is not None:
-                    decision = m.shield.update(risk)
+                    decision = m.shield.update(risk, world.ego.speed, unseen)
                     engaged, decel = decision.engaged, max(decel, decision.deceleration)
                 m.queue.append(-decel if decel > 0 else driver.comfort)
                 applied = m.queue.popleft()

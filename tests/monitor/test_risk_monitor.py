@@ -410,3 +410,19 @@ def test_coverage_reads_a_detected_group_as_covered_where_pairs_read_a_miss(fis,
     paired = RiskMonitor(fis, prior, CAMERA, pairs).step(depth, group)
     assert 0.2 < paired.alignment.pair_iou[0] < 0.3 and not paired.alignment.matched[0]
     assert paired.iou == 0.0 and paired.rdd == 1.0 and paired.risk > 0.75
+
+
+def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monitor, monitor, scene_depth):
+    # the pedestrian: x 9 -+ 0.35 (face at 8.65 m), y 0.8 -+ 0.35
+    missed = geometric_monitor.step(scene_depth, np.zeros((0, 7)))
+    assert missed.unseen.shape == (1, 3)
+    x, y_min, y_max = missed.unseen[0]
+    assert x == pytest.approx(8.65, abs=0.02) and 0.45 <= y_min < y_max <= 1.15 and y_max - y_min > 0.5
+    seen = geometric_monitor.step(scene_depth, PEDESTRIAN)
+    assert seen.status == OK and seen.unseen.shape == (0, 3)
+    # the paper's view back-projects its boxes (Camera.ground_extents)
+    paper = monitor.step(scene_depth, np.zeros((0, 7)))
+    np.testing.assert_array_equal(paper.unseen, CAMERA.ground_extents(paper.S[~paper.alignment.matched]))
+    # no view, no answer: the shield must not read "nothing unseen" into an invalid frame
+    assert geometric_monitor.step(np.full_like(scene_depth, np.nan), PEDESTRIAN).unseen is None
+    assert json.loads(json.dumps(missed.to_dict()))["unseen"] == missed.unseen.tolist()

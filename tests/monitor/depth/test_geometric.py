@@ -90,6 +90,15 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     # the pedestrian's front face is at x = 9 - 0.73 / 2 = 8.635 m
     assert view.free_distance == pytest.approx(8.635, abs=0.01)
     assert view.boxes[0, 4] < view.boxes[1, 4]
+    # where they stand, from their blocks: the pedestrian's face at x = 8.635 m spans
+    # y = -1 -+ 0.335, the car's rear face at x = 13.7 m spans y = 0.2 -+ 0.975; the 5th and
+    # 95th percentiles of the blocks' y lie within a block's width (4 px: 0.03 m at 8.6 m,
+    # 0.04 m at 13.7 m) plus 5 % of the span inside the true edges
+    pedestrian, car = view.extents
+    assert pedestrian[0] == pytest.approx(8.635, abs=0.01) and car[0] == pytest.approx(13.7, abs=0.02)
+    for (x, lo, hi), (y, half) in zip((pedestrian, car), ((-1.0, 0.335), (0.2, 0.975))):
+        assert y - half <= lo <= y - half + 0.05 * 2 * half + 0.05
+        assert y + half - 0.05 * 2 * half - 0.05 <= hi <= y + half
 
 
 # a street's structure and its traffic beside the lane, for a corridor wide enough to hold both
@@ -458,8 +467,9 @@ def test_object_stats_equals_numpy():
     ds = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
     xs = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
     corridor = (rng.random((20, 30)) < 0.1).astype(np.uint8) * (labels >= 0)
+    ys = rng.uniform(-8.0, 8.0, (20, 30)).astype(np.float32)
     corridor[labels == 5] = 0  # component 5 lies outside the corridor
-    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, 3, 5.0)
+    stats = kernels.object_stats(labels, 6, corridor.astype(np.uint8), ds, xs, ys, 3, 5.0, 10.0)
     for m in range(6):
         rows, cols = np.nonzero(labels == m)
         inside = (labels == m) & (corridor > 0)
@@ -472,9 +482,11 @@ def test_object_stats_equals_numpy():
         if inside.sum() >= 3:
             assert stats[m, 7] == pytest.approx(np.percentile(ds[labels == m].astype(np.float64), 5.0),
                                                 rel=1e-12)
+            side = ys[labels == m].astype(np.float64)
+            np.testing.assert_allclose(stats[m, 8:], np.percentile(side, [10.0, 90.0]), rtol=1e-12)
         else:
-            assert np.isnan(stats[m, 7])
-    assert np.isnan(stats[5, 7])
+            assert np.isnan(stats[m, 7:]).all()
+    assert np.isnan(stats[5, 7:]).all()
 
 
 # --------------------------------------------------------------------------- errors

@@ -427,3 +427,20 @@ def test_projection_matches_the_nuscenes_way_of_clipping():
                                    [(u0 + u1) / 2, (v0 + v1) / 2, u1 - u0, v1 - v0, depth],
                                    rtol=1e-7, atol=1e-6)
     assert len(kept) > 60 and n_clipped > 20  # the sample exercises the clipping
+
+
+def test_ground_extents_of_projected_boxes_are_their_near_faces():
+    camera = Camera.nuscenes_front()
+    # a car 10 m ahead and one in the right lane: near faces at x = 10 - 2 = 8 m and
+    # 14 - 2.25 = 11.75 m, spanning y = 0 -+ 0.9 and -3.5 -+ 0.95 (their bottom corners)
+    boxes3d = np.array([[10.0, 0.0, 0.75, 1.8, 4.0, 1.5, 0.0], [14.0, -3.5, 0.8, 1.9, 4.5, 1.6, 0.0]])
+    P, _ = project_boxes(boxes3d, camera, "camera_depth")
+    extents = camera.ground_extents(P)
+    np.testing.assert_allclose(extents[0], [8.0, -0.9, 0.9], atol=0.02)
+    # the right-lane car's box also holds its left side, seen at a slant beyond the rear face:
+    # its near x and outer edge are the rear face's (the camera sits at x = 1.70 m, so the
+    # rear face is 10.05 m deep), its inner edge the far left corner's pixel (x = 16.25 m,
+    # y = -2.55 m, 14.55 m deep) back-projected at the rear face's depth:
+    # -2.55 * 10.05 / 14.55 = -1.76 m, nearer the path than the car is
+    np.testing.assert_allclose(extents[1], [11.75, -4.45, -2.55 * 10.05 / 14.55], atol=0.05)
+    assert camera.ground_extents(np.zeros((0, 5))).shape == (0, 3)

@@ -122,6 +122,23 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
 
 
+def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_traffic(perception, monitor):
+    gated = replace(monitor.config.shield, path_half_width=1.25)
+    # the same blind detector and obstacle: the obstacle stands in the path, the gate opens
+    spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
+    base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
+    assert base.collided and not shielded.collided and shielded.engaged_frames > 0
+    assert shielded.driver.endswith(" p1.25")
+    # a hazard-free drive with the blind detector: the risk is the rule base's worst whenever
+    # traffic is in view. The paper's shield brakes in every frame and never arrives; the
+    # gated one brakes only while something stands in the path within reach (a quarter of
+    # the frames here) and arrives
+    drive = ScenarioSpec("hazard-free", "nominal", 0)
+    _, paper, path = run_scenario(drive, perception, monitor, [monitor.config.shield, gated], condition=BLIND)
+    assert paper.engaged_frames == paper.frames and paper.outcome == "timeout"
+    assert path.outcome == "arrived" and 0 < path.engaged_frames < 0.5 * path.frames
+
+
 def test_seeds_reproduce_and_differ(perception, monitor):
     spec = ScenarioSpec("cut-in", "rain", 3)
     first = [r.to_dict() for r in run_scenario(spec, perception, monitor, [monitor.config.shield])]
