@@ -43,6 +43,22 @@ class ShieldDecision:
     risk: float
 
 
+def check_without_speed(config: ShieldConfig, where: str) -> ShieldConfig:
+    """``config`` for a run whose frames carry no ego speed (recorded frames, the demo):
+    refused, naming the setting, when it has a path gate, which needs the speed.
+
+    Raises
+    ------
+    ValueError
+        ``shield.path_half_width`` is set.
+    """
+    if config.path_half_width is not None:
+        raise ValueError(f"shield.path_half_width = {config.path_half_width:g}: the path gate needs the "
+                         f"ego's speed, not available in {where}; set it to null there (fuzzrisk "
+                         "simulate drives the car and gives the gate its speed)")
+    return config
+
+
 class Shield:
     """Risk in, deceleration request out, one frame at a time.
 

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield
+from monitor.shield import Shield, check_without_speed
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -113,3 +113,10 @@ def test_the_gated_shield_refuses_missing_or_bad_inputs(speed, unseen, message):
 def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
         ShieldConfig(**{field: value})
+
+
+def test_runs_without_a_speed_refuse_a_gated_shield():
+    assert check_without_speed(ShieldConfig(), "these frames") == ShieldConfig()
+    with pytest.raises(ValueError, match="shield.path_half_width = 1.25: the path gate needs the ego's "
+                                         "speed, not available in these frames"):
+        check_without_speed(GATED, "these frames")

@@ -168,3 +168,14 @@ def test_synthetic_scenes_by_default(tmp_path):
     assert [r["frame"] for r in rows] == [0, 1]
     assert all(r["target"] is None or 0 <= r["target"] <= 1 for r in rows)
     assert "synthetic" in (out / "summary.md").read_text()
+
+
+def test_a_path_gated_shield_is_refused_for_recorded_frames(recording, tmp_path, capsys):
+    # the gate needs the ego's speed, which recorded frames do not carry: refused up front,
+    # naming the setting, and nothing is written
+    config = tmp_path / "gate.yaml"
+    config.write_text("shield: {path_half_width: 1.25}\n")
+    out = tmp_path / "out"
+    assert main(_argv(recording, out, "--config", str(config))) == 2
+    assert "shield.path_half_width = 1.25: the path gate needs the ego's speed" in capsys.readouterr().err
+    assert not out.exists() or not any(out.iterdir())
