@@ -19,11 +19,8 @@ def score_pairs(s, p, partner, alpha, beta, pair_iou, pair_rdd, matched):
     """Fill the per-S alignment table (M,) given each S's partner row in P (-1: none).
 
     An S without a partner gets IoU 0, RDD 1, not matched; a pair is matched when
-    IoU > alpha and |RDD| < beta. Returns the sums over S of the scores (IoU where
-    matched else 0, RDD where matched else 1).
+    IoU > alpha and |RDD| < beta.
     """
-    iou_sum = 0.0
-    rdd_sum = 0.0
     for i in range(partner.shape[0]):
         j = partner[i]
         if j < 0:
@@ -34,12 +31,6 @@ def score_pairs(s, p, partner, alpha, beta, pair_iou, pair_rdd, matched):
             pair_iou[i] = iou_one(s[i], p[j])
             pair_rdd[i] = rdd_one(p[j, 4], s[i, 4])
             matched[i] = pair_iou[i] > alpha and abs(pair_rdd[i]) < beta
-        if matched[i]:
-            iou_sum += pair_iou[i]
-            rdd_sum += pair_rdd[i]
-        else:
-            rdd_sum += 1.0
-    return iou_sum, rdd_sum
 
 
 @kernel
@@ -74,16 +65,13 @@ def score_coverage(s, p, alpha, beta, partner, pair_cov, pair_rdd, matched):
     detection nearer than S is cautious, as USC's DR treats it). ``pair_cov`` is the area
     of S inside the union of those P over the area of S (0 for an S of zero area);
     ``partner`` the one with the largest intersection (-1: none overlaps), ``pair_rdd`` its
-    RDD (1 without one); ``matched`` is ``pair_cov > alpha`` with a partner. Returns the
-    sums over S of the scores, as :func:`score_pairs` does.
+    RDD (1 without one); ``matched`` is ``pair_cov > alpha`` with a partner.
     """
     n = p.shape[0]
     x0 = np.empty(n)
     x1 = np.empty(n)
     y0 = np.empty(n)
     y1 = np.empty(n)
-    cov_sum = 0.0
-    rdd_sum = 0.0
     for i in range(s.shape[0]):
         sx0, sx1 = s[i, 0] - 0.5 * s[i, 2], s[i, 0] + 0.5 * s[i, 2]
         sy0, sy1 = s[i, 1] - 0.5 * s[i, 3], s[i, 1] + 0.5 * s[i, 3]
@@ -106,9 +94,3 @@ def score_coverage(s, p, alpha, beta, partner, pair_cov, pair_rdd, matched):
         pair_cov[i] = min(1.0, _union_area(x0, x1, y0, y1, k) / area) if (k > 0 and area > 0.0) else 0.0
         pair_rdd[i] = rdd_one(p[best, 4], s[i, 4]) if best >= 0 else 1.0
         matched[i] = best >= 0 and pair_cov[i] > alpha
-        if matched[i]:
-            cov_sum += pair_cov[i]
-            rdd_sum += pair_rdd[i]
-        else:
-            rdd_sum += 1.0
-    return cov_sum, rdd_sum

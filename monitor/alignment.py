@@ -220,18 +220,19 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     matched = np.empty(m, dtype=np.bool_)
     if matching == "coverage":
         partner = np.empty(m, dtype=np.int64)
-        iou_sum, rdd_sum = _k.score_coverage(S, P, alpha, beta, partner, pair_iou, pair_rdd, matched)
+        _k.score_coverage(S, P, alpha, beta, partner, pair_iou, pair_rdd, matched)
     else:
         partner = _assign(S, P)
-        iou_sum, rdd_sum = _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
+        _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
-    elif weighting == "inverse_distance":
-        w = 1.0 / S[:, 4]
-        scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
-        iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
     else:
-        iou_mean, rdd_mean = iou_sum / m, rdd_sum / m
+        scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
+        if weighting == "inverse_distance":
+            w = 1.0 / S[:, 4]
+            iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
+        else:
+            iou_mean, rdd_mean = float(scored_iou.mean()), float(scored_rdd.mean())
     return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta, matching)
 
 

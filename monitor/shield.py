@@ -43,9 +43,9 @@ class ShieldDecision:
     risk: float
 
 
-def check_without_speed(config: ShieldConfig, where: str) -> ShieldConfig:
-    """``config`` for a run whose frames carry no ego speed (recorded frames, the demo):
-    refused, naming the setting, when it has a path gate, which needs the speed.
+def check_ungated(config: ShieldConfig, where: str) -> ShieldConfig:
+    """``config`` for a command whose shield runs on the risk alone (the demo, runs over
+    recorded frames): refused, naming the setting, when it has a path gate.
 
     Raises
     ------
@@ -53,9 +53,9 @@ def check_without_speed(config: ShieldConfig, where: str) -> ShieldConfig:
         ``shield.path_half_width`` is set.
     """
     if config.path_half_width is not None:
-        raise ValueError(f"shield.path_half_width = {config.path_half_width:g}: the path gate needs the "
-                         f"ego's speed, not available in {where}; set it to null there (fuzzrisk "
-                         "simulate drives the car and gives the gate its speed)")
+        raise ValueError(f"shield.path_half_width = {config.path_half_width:g}: {where} runs the shield "
+                         "on the risk alone; the path gate is wired into the closed loop only (fuzzrisk "
+                         "simulate): set it to null here")
     return config
 
 

@@ -33,7 +33,7 @@ from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
-from monitor.shield import Shield, check_without_speed
+from monitor.shield import Shield, check_ungated
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
@@ -121,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     rules_path = Path(args.rules) if args.rules else shipped_rules()
     fis = fuzzcore.load(rules_path)
     config = load_config(args.config)
-    check_without_speed(config.shield, "the demo's synthetic frames")
+    check_ungated(config.shield, "the demo")
     bench = Benchmark(conditions=tuple(args.conditions), scenes_per_condition=args.scenes,
                       test_scenes=args.scenes // 2, n_frames=args.frames, prior_scenes=2, seed=args.seed)
     n_frames = len(bench.scenes()) * args.frames + bench.prior_scenes * args.frames

@@ -38,7 +38,7 @@ from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
 from monitor.risk_monitor import STATUSES
-from monitor.shield import Shield, check_without_speed
+from monitor.shield import Shield, check_ungated
 
 RUN_FILE = "run.json"
 SUMMARY_FILE = "summary.md"
@@ -147,7 +147,7 @@ class RunOutput:
     def __init__(self, out: str | Path, description: dict, plans: list[ScenePlan], shield: ShieldConfig,
                  *, overwrite: bool = False):
         self.out = Path(out)
-        check_without_speed(shield, "a run over recorded frames")
+        check_ungated(shield, "fuzzrisk monitor")
         self.threshold = shield.threshold
         stems = {}
         for plan in plans:

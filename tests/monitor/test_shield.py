@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, check_without_speed
+from monitor.shield import Shield, check_ungated
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -115,8 +115,8 @@ def test_gate_settings_are_checked(field, value, message):
         ShieldConfig(**{field: value})
 
 
-def test_runs_without_a_speed_refuse_a_gated_shield():
-    assert check_without_speed(ShieldConfig(), "these frames") == ShieldConfig()
-    with pytest.raises(ValueError, match="shield.path_half_width = 1.25: the path gate needs the ego's "
-                                         "speed, not available in these frames"):
-        check_without_speed(GATED, "these frames")
+def test_commands_whose_shield_runs_on_the_risk_alone_refuse_a_gated_one():
+    assert check_ungated(ShieldConfig(), "this command") == ShieldConfig()
+    with pytest.raises(ValueError, match="shield.path_half_width = 1.25: this command runs the shield on "
+                                         "the risk alone; the path gate is wired into the closed loop only"):
+        check_ungated(GATED, "this command")

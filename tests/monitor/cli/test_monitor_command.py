@@ -170,12 +170,13 @@ def test_synthetic_scenes_by_default(tmp_path):
     assert "synthetic" in (out / "summary.md").read_text()
 
 
-def test_a_path_gated_shield_is_refused_for_recorded_frames(recording, tmp_path, capsys):
-    # the gate needs the ego's speed, which recorded frames do not carry: refused up front,
-    # naming the setting, and nothing is written
+def test_a_path_gated_shield_is_refused(recording, tmp_path, capsys):
+    # this command's shield runs on the risk alone: a gate is refused up front, naming the
+    # setting, and nothing is written
     config = tmp_path / "gate.yaml"
     config.write_text("shield: {path_half_width: 1.25}\n")
     out = tmp_path / "out"
     assert main(_argv(recording, out, "--config", str(config))) == 2
-    assert "shield.path_half_width = 1.25: the path gate needs the ego's speed" in capsys.readouterr().err
+    assert "shield.path_half_width = 1.25: fuzzrisk monitor runs the shield on the risk alone" in \
+        capsys.readouterr().err
     assert not out.exists() or not any(out.iterdir())
