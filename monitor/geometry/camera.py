@@ -158,10 +158,9 @@ class Camera:
         """
         b = np.asarray(boxes, dtype=np.float64).reshape(-1, 5)
         v = b[:, 1] + 0.5 * b[:, 3]
-        corners = [np.column_stack([(b[:, 0] + sign * 0.5 * b[:, 2] - self.K[0, 2]) / self.K[0, 0],
-                                    (v - self.K[1, 2]) / self.K[1, 1], np.ones(len(b))]) * b[:, 4:5]
-                   for sign in (-1.0, 1.0)]
-        left, right = (self.camera_to_ego(c) if len(b) else np.zeros((0, 3)) for c in corners)
+        left, right = (self.camera_to_ego(np.column_stack([
+            (b[:, 0] + sign * 0.5 * b[:, 2] - self.K[0, 2]) / self.K[0, 0],
+            (v - self.K[1, 2]) / self.K[1, 1], np.ones(len(b))]) * b[:, 4:5]) for sign in (-1.0, 1.0))
         return np.column_stack([np.minimum(left[:, 0], right[:, 0]),
                                 np.minimum(left[:, 1], right[:, 1]),
                                 np.maximum(left[:, 1], right[:, 1])])
