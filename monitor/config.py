@@ -201,6 +201,16 @@ class ShieldConfig:
     front : float >= 0
         Metres from the ego origin (nuScenes': the rear axle) to the front bumper, where the
         reach starts.
+    confirm_frames : int >= 1
+        With a path gate: an unseen object counts once the view has reported an unseen
+        object where it stands in this many consecutive frames (1: at once), as a tracker
+        confirms a track; a depth artefact rarely stands still for two frames.
+    memory_frames : int >= 0
+        With a path gate: an unseen object does not count when a detection stood where it
+        stands in at least ``memory_hits`` of the last ``memory_frames`` frames (0: no
+        memory): the car's tracker knows it through the frames its detector misses it.
+    memory_hits : int >= 1
+        See ``memory_frames``; at most ``memory_frames`` when that is > 0.
     """
 
     threshold: float = 0.5
@@ -211,16 +221,22 @@ class ShieldConfig:
     headway: float = 0.5
     margin: float = 2.0
     front: float = 3.8
+    confirm_frames: int = 1
+    memory_frames: int = 0
+    memory_hits: int = 2
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
         _set(self, "release", _unit(self.release, "release"))
         if self.release > self.threshold:
             raise ValueError(f"release = {self.release} must be <= threshold = {self.threshold}")
-        if isinstance(self.hold_frames, bool) or not isinstance(self.hold_frames, numbers.Integral) \
-                or self.hold_frames < 0:
-            raise ValueError(f"hold_frames = {self.hold_frames!r}, must be an integer >= 0")
-        _set(self, "hold_frames", int(self.hold_frames))
+        for name, least in (("hold_frames", 0), ("confirm_frames", 1), ("memory_frames", 0), ("memory_hits", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
+                raise ValueError(f"{name} = {value!r}, must be an integer >= {least}")
+            _set(self, name, int(value))
+        if 0 < self.memory_frames < self.memory_hits:
+            raise ValueError(f"memory_hits = {self.memory_hits} must be <= memory_frames = {self.memory_frames}")
         deceleration = _number(self.deceleration, "deceleration")
         if not (math.isfinite(deceleration) and deceleration > 0):
             raise ValueError(f"deceleration = {self.deceleration!r}, must be > 0 m/s^2")

@@ -153,3 +153,25 @@ def box_corners(boxes3d) -> np.ndarray:
     boxes = as_boxes3d(boxes3d)
     local = _CORNER_SIGNS[None] * (0.5 * boxes[:, None, [4, 3, 5]])
     return boxes[:, None, :3] + np.einsum("nij,nkj->nki", box_axes(boxes), local)
+
+
+def footprints(boxes: np.ndarray) -> np.ndarray:
+    """Where validated upright boxes stand on the ground, seen from the ego: per box ``x``
+    its nearest extent along the frame's x axis, ``y_min, y_max`` its extent across it.
+
+    Parameters
+    ----------
+    boxes : ndarray of shape (n, 7)
+        Validated boxes (:func:`as_boxes3d`), metres and radians.
+
+    Returns
+    -------
+    ndarray of shape (n, 3), float64
+        ``x - half_x, y - half_y, y + half_y``, metres, where ``half_x`` and ``half_y`` are
+        the half extents of the box's ground rectangle along x and y
+        (``(|cos yaw| l + |sin yaw| w) / 2`` and ``(|sin yaw| l + |cos yaw| w) / 2``).
+    """
+    c, s = np.abs(np.cos(boxes[:, 6])), np.abs(np.sin(boxes[:, 6]))
+    half_x = 0.5 * (c * boxes[:, 4] + s * boxes[:, 3])
+    half_y = 0.5 * (s * boxes[:, 4] + c * boxes[:, 3])
+    return np.column_stack([boxes[:, 0] - half_x, boxes[:, 1] - half_y, boxes[:, 1] + half_y])

@@ -46,6 +46,7 @@ import numpy as np
 from monitor.config import ShieldConfig
 from monitor.geometry.camera import Camera
 from monitor.geometry.boxes import DEFAULT_RANGE_M
+from monitor.geometry.boxes3d import footprints
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
@@ -146,14 +147,9 @@ def required_gap(speed: float, decel: float, reaction: float, hazard_speed: floa
 def in_reach(detections: np.ndarray, scores: np.ndarray, speed: float, driver: Driver) -> bool:
     """Is a detection (score >= ``min_score``) in the corridor within the stopping distance
     plus the margin? Boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin)."""
-    boxes = detections[scores >= driver.min_score]
-    if boxes.shape[0] == 0:
-        return False
-    w, l, yaw = boxes[:, 3], boxes[:, 4], boxes[:, 6]
-    half_x = 0.5 * (np.abs(np.cos(yaw)) * l + np.abs(np.sin(yaw)) * w)  # extent along the road
-    half_y = 0.5 * (np.abs(np.sin(yaw)) * l + np.abs(np.cos(yaw)) * w)  # and across it
-    ahead = boxes[:, 0] - half_x - EGO_FRONT_M
-    in_path = np.abs(boxes[:, 1]) < driver.corridor + half_y
+    feet = footprints(detections[scores >= driver.min_score])
+    ahead = feet[:, 0] - EGO_FRONT_M
+    in_path = (feet[:, 2] > -driver.corridor) & (feet[:, 1] < driver.corridor)
     limit = reach(speed, driver.brake, driver.reaction, driver.margin)
     return bool(np.any(in_path & (ahead > -1.0) & (ahead < limit)))
 
@@ -331,10 +327,9 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
         next_branches = []
         for world, group in branches:
             depth, dets, visible, distance = perception.frame(world, condition, streams[step])
-            risk, unseen = float("nan"), None
+            report = None
             if any(m.shield is not None for m in group):
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
-                risk, unseen = report.risk, report.unseen
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and distance <= max_range:
@@ -350,13 +345,14 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 decel = driver.brake if m.braking else 0.0
                 engaged = False
                 if m.shield is not None:
-                    decision = m.shield.update(risk, world.ego.speed, unseen)
+                    decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
+                                               detected=report.detected, time=world.time)
                     engaged, decel = decision.engaged, max(decel, decision.deceleration)
                 m.queue.append(-decel if decel > 0 else driver.comfort)
                 applied = m.queue.popleft()
                 h = m.run.history
                 for key, value in zip(HISTORY_KEYS, (world.time, world.ego.speed, world.hazard_gap(),
-                                                     risk if m.shield is not None else float("nan"),
+                                                     report.risk if m.shield is not None else float("nan"),
                                                      engaged, max(-applied, 0.0))):
                     h[key].append(value)
                 m.run.frames += 1

@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, check_ungated
+from monitor.shield import Shield, check_ungated, consistent
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -109,6 +109,9 @@ def test_the_gated_shield_refuses_missing_or_bad_inputs(speed, unseen, message):
     ("headway", -0.1, "headway = -0.1, must be >= 0 seconds"),
     ("margin", float("inf"), "margin = inf, must be >= 0 metres"),
     ("front", -1.0, "front = -1.0, must be >= 0 metres"),
+    ("confirm_frames", 0, "confirm_frames = 0, must be an integer >= 1"),
+    ("memory_frames", 1.5, "memory_frames = 1.5, must be an integer >= 0"),
+    ("memory_hits", 0, "memory_hits = 0, must be an integer >= 1"),
 ])
 def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
@@ -120,3 +123,83 @@ def test_commands_whose_shield_runs_on_the_risk_alone_refuse_a_gated_one():
     with pytest.raises(ValueError, match="shield.path_half_width = 1.25: this command runs the shield on "
                                          "the risk alone; the path gate is wired into the closed loop only"):
         check_ungated(GATED, "this command")
+
+
+# ------------------------------------------------------- the gate's confirmation and memory
+
+def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion():
+    now = np.array([[20.0, -0.5, 0.5]])
+    # dt 0.1 s at 10 m/s: the ego travels 1 m; x tolerance 0.5 + 0.15 * 20 + 2 * 0.1 = 3.7 m, so
+    # then-x may lie in [20 - 3.7, 20 + 1 + 3.7] = [16.3, 24.7]; y tolerance 0.5 + 0.2 = 0.7 m
+    for x_then, expected in ((21.0, True), (20.0, True), (24.69, True), (24.71, False), (16.31, True),
+                             (16.29, False)):
+        assert consistent(now, np.array([[x_then, -0.5, 0.5]]), 0.1, 10.0)[0] is np.bool_(expected), x_then
+    for span, expected in (((1.19, 2.0), True), ((1.21, 2.0), False), ((-3.0, -1.19), True),
+                           ((-3.0, -1.21), False)):
+        assert consistent(now, np.array([[21.0, *span]]), 0.1, 10.0)[0] is np.bool_(expected), span
+    # several objects each way: any one of then will do, each of now answered apart
+    now2 = np.array([[20.0, -0.5, 0.5], [8.0, 2.0, 3.0]])
+    then2 = np.array([[40.0, -0.5, 0.5], [8.5, 2.1, 2.9]])
+    assert consistent(now2, then2, 0.1, 10.0).tolist() == [False, True]
+    assert consistent(now2, np.zeros((0, 3)), 0.1, 10.0).tolist() == [False, False]
+
+
+CONFIRMED = ShieldConfig(path_half_width=1.25, confirm_frames=2)
+
+
+def test_a_confirmed_gate_ignores_a_flicker_and_brakes_for_what_stays():
+    shield = Shield(CONFIRMED)
+    speed, dt = 10.0, 0.1
+    # an artefact in the path at 8 m, then one at 14 m: the second is not where the first was
+    # (x tolerance at 14 m: 0.5 + 2.1 + 0.2 = 2.8 m; then-x should be in [11.2, 17.8])
+    flicker = [np.array([[8.0, -0.2, 0.2]]), np.array([[14.0, -0.2, 0.2]]), np.zeros((0, 3))]
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(flicker)] \
+        == [False, False, False]
+    # a standing object at 15 m, then 14 m (the ego came 1 m closer): engaged on the second frame
+    shield = Shield(CONFIRMED)
+    standing = [np.array([[15.0 - k, -0.2, 0.2]]) for k in range(3)]
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(standing)] \
+        == [False, True, True]
+    # a frame without a view is not gated, and tells nothing about where objects stand
+    shield = Shield(CONFIRMED)
+    assert shield.update(0.9, speed=speed, unseen=None, time=0.0).engaged
+    shield.reset()
+    assert not shield.update(0.9, speed=speed, unseen=standing[1], time=0.1).engaged
+
+
+REMEMBERS = ShieldConfig(path_half_width=1.25, memory_frames=5, memory_hits=2)
+
+
+@pytest.mark.parametrize("detected_in, engaged", [
+    ((), True),           # never detected: unseen
+    ((1,), True),         # detected once in the last five frames: one hit < 2
+    ((1, 3), False),      # twice: the tracker knows it
+    ((1, 5), False),      # the frame just before counts too
+    ((0, 4), True),       # the frame six back has left the memory: one hit
+])
+def test_a_gate_with_a_memory_leaves_to_the_car_what_it_detected_lately(detected_in, engaged):
+    shield = Shield(REMEMBERS)
+    car = np.array([[14.0, -0.9, 0.9]])  # a lead car holding its distance ahead in the path
+    none = np.zeros((0, 3))
+    for k in range(6):  # six frames with the car covered by a detection or not there at all
+        shield.update(0.2, speed=8.0, unseen=none, detected=car if k in detected_in else none, time=0.1 * k)
+    assert shield.update(0.9, speed=8.0, unseen=car, detected=none, time=0.6).engaged is engaged
+
+
+@pytest.mark.parametrize("config, kwargs, message", [
+    (CONFIRMED, {"unseen": np.zeros((0, 3))}, r"time = None: a shield with confirm_frames > 1"),
+    (CONFIRMED, {"unseen": np.zeros((0, 3)), "time": float("nan")}, "time = nan"),
+    (REMEMBERS, {"unseen": np.zeros((0, 3)), "time": 0.0}, "detected is None: a shield with a memory"),
+    (REMEMBERS, {"unseen": np.zeros((0, 3)), "time": 0.0, "detected": np.zeros((1, 2))},
+     r"detected has shape \(1, 2\)"),
+])
+def test_a_tracking_gate_refuses_missing_or_bad_inputs(config, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        Shield(config).update(0.9, speed=5.0, **kwargs)
+
+
+def test_a_tracking_gate_needs_increasing_times():
+    shield = Shield(CONFIRMED)
+    shield.update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=1.0)
+    with pytest.raises(ValueError, match=r"time = 1.0 \(the last frame's was 1.0\)"):
+        shield.update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=1.0)
