@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, check_ungated
+from monitor.shield import Shield
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -114,9 +114,3 @@ def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
         ShieldConfig(**{field: value})
 
-
-def test_commands_whose_shield_runs_on_the_risk_alone_refuse_a_gated_one():
-    assert check_ungated(ShieldConfig(), "this command") == ShieldConfig()
-    with pytest.raises(ValueError, match="shield.path_half_width = 1.25: this command runs the shield on "
-                                         "the risk alone; the path gate is wired into the closed loop only"):
-        check_ungated(GATED, "this command")
