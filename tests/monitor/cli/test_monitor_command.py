@@ -14,6 +14,7 @@ from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
 from recording_fixture import read_rows, write_prior, write_recording
+from shield_reference import GATE_YAML, gated_engaged
 
 N_FRAMES = 10  # two chunks of 8 and 2 frames (monitor.offline.run.CHUNK_FRAMES)
 
@@ -174,22 +175,6 @@ def test_synthetic_scenes_by_default(tmp_path):
 
 # --- a path-gated shield: given each frame's ego speed and unseen objects, replayed on a resume
 
-GATE = "shield: {path_half_width: 1.25, hold_frames: 0}\n"
-
-
-def _gate_reference(row: dict, c) -> bool:
-    """The gated shield without hold or hysteresis, written out: engaged on a frame whose risk
-    is above the threshold while an unseen object reaches within ``path_half_width`` of the
-    centreline and lies within v^2 / (2 a) + headway v + margin of the bumper (a frame without
-    a view: by its risk alone). Without hold and hysteresis it has no memory."""
-    v = row["ego_speed"]
-    reach = v * v / (2.0 * c.deceleration) + c.headway * v + c.margin
-    in_path = row["unseen"] is None or any(
-        x - c.front <= reach and y_max >= -c.path_half_width and y_min <= c.path_half_width
-        for x, y_min, y_max in row["unseen"])
-    return row["risk"] > c.threshold and in_path
-
-
 def _unseen(row: dict):
     return None if row["unseen"] is None else np.array(row["unseen"], dtype=np.float64).reshape(-1, 3)
 
@@ -205,7 +190,7 @@ def _gated_argv(recording, out, config, *extra):
 def gated_run(recording, tmp_path_factory):
     folder = tmp_path_factory.mktemp("gated")
     config = folder / "gate.yaml"
-    config.write_text(GATE)
+    config.write_text(GATE_YAML)
     assert main(_gated_argv(recording, folder / "out", config)) == 0
     return folder / "out", config
 
@@ -228,7 +213,7 @@ def test_a_gated_shield_gets_each_frames_speed_and_unseen_objects(recording, ser
                 {k: v for k, v in other.items() if k != "shield"}
             decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row))
             assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
-            assert row["shield"]["engaged"] is _gate_reference(row, c)
+            assert row["shield"]["engaged"] is gated_engaged(row, c)
     # drive-b (rain) moves at 4.4 m/s with high risk from objects beside its path or beyond its
     # reach (7.4 m): the paper's shield brakes there, the gated one does not
     differ = [(row["shield"]["engaged"], other["shield"]["engaged"])
@@ -267,7 +252,7 @@ def test_a_tampered_ego_speed_does_not_replay(recording, gated_run, tmp_path, ca
     # a frame the gated shield let go whose unseen object in the path would be within the reach
     # at 20 m/s (400 / 6 + 10 + 2 = 78.7 m): with that speed stored it engages
     n = next(k for k, r in enumerate(rows)
-             if not r["shield"]["engaged"] and _gate_reference({**r, "ego_speed": 20.0}, c))
+             if not r["shield"]["engaged"] and gated_engaged({**r, "ego_speed": 20.0}, c))
     rows[n]["ego_speed"] = 20.0
     path.write_text("".join(json.dumps(r) + "\n" for r in rows))
     assert main(_gated_argv(recording, out, gated_run[1])) == 2
