@@ -52,22 +52,6 @@ class ShieldDecision:
     risk: float
 
 
-def check_ungated(config: ShieldConfig, where: str) -> ShieldConfig:
-    """``config`` for a command whose shield runs on the risk alone (the demo, runs over
-    recorded frames): refused, naming the setting, when it has a path gate.
-
-    Raises
-    ------
-    ValueError
-        ``shield.path_half_width`` is set.
-    """
-    if config.path_half_width is not None:
-        raise ValueError(f"shield.path_half_width = {config.path_half_width:g}: {where} runs the shield "
-                         "on the risk alone; the path gate is wired into the closed loop only (fuzzrisk "
-                         "simulate): set it to null here")
-    return config
-
-
 class Shield:
     """Risk in, deceleration request out, one frame at a time.
 

@@ -4,8 +4,8 @@ Generates a few scenes per condition (:mod:`monitor.synthetic.suite`), builds th
 prior from separate nominal scenes, runs the :class:`~monitor.RiskMonitor` and the shield
 on every frame, prints a per-condition summary and writes to the output folder:
 
-- ``frames.jsonl``: one monitor report per frame (with the shield's decision and the
-  ground-truth target 1 - USC~);
+- ``frames.jsonl``: one monitor report per frame (with the ego's speed, m/s, the shield's
+  decision and the ground-truth target 1 - USC~);
 - ``report.md``: first the quality measures of the risk (:mod:`monitor.offline.measures`)
   on the held-out half of the scenes (the other half gives the constant predictor's mean),
   then the summary table, the figures, and how the data were made;
@@ -33,7 +33,7 @@ from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
-from monitor.shield import Shield, check_ungated
+from monitor.shield import Shield
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
@@ -121,7 +121,6 @@ def run(args: argparse.Namespace) -> int:
     rules_path = Path(args.rules) if args.rules else shipped_rules()
     fis = fuzzcore.load(rules_path)
     config = load_config(args.config)
-    check_ungated(config.shield, "the demo")
     bench = Benchmark(conditions=tuple(args.conditions), scenes_per_condition=args.scenes,
                       test_scenes=args.scenes // 2, n_frames=args.frames, prior_scenes=2, seed=args.seed)
     n_frames = len(bench.scenes()) * args.frames + bench.prior_scenes * args.frames
@@ -135,12 +134,14 @@ def run(args: argparse.Namespace) -> int:
         times, risks, targets, statuses = [], [], [], []
         for frame in scene.frames:
             ob = observe(monitor, frame, scene.name, scene.condition)
-            decision = shield.update(ob.report.risk)
+            decision = shield.update(ob.report.risk, speed=frame.ego_speed, unseen=ob.report.unseen,
+                                     detected=ob.report.detected, time=frame.timestamp)
             obs_by_condition.setdefault(scene.condition, []).append(ob)
             split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None
             rows.append({"scene": scene.name, "condition": scene.condition, "frame": frame.index,
-                         "time": frame.timestamp, **ob.report.to_dict(), "target": target,
+                         "time": frame.timestamp, "ego_speed": frame.ego_speed, **ob.report.to_dict(),
+                         "target": target,
                          "shield": {"engaged": decision.engaged, "deceleration": decision.deceleration}})
             times.append(frame.timestamp)
             risks.append(ob.report.risk)

@@ -129,6 +129,8 @@ class FrameResult:
     index : int
     timestamp : float
         Seconds from the start of the scene.
+    ego_speed : float
+        The ego's speed, m/s (for a path-gated shield).
     token : str or None
         The source's id of the frame (nuScenes sample token).
     has_ground_truth : bool
@@ -143,6 +145,7 @@ class FrameResult:
     key: str
     index: int
     timestamp: float
+    ego_speed: float
     token: str | None
     has_ground_truth: bool
     observation: Observation | None = None
@@ -213,8 +216,8 @@ def resolve_depths(records: list[FrameRecord], image_depth: ImageDepth | None
 
 
 def _result(record: FrameRecord, condition: str, **outcome) -> FrameResult:
-    return FrameResult(record.scene, condition, record.key, record.index, record.timestamp, record.token,
-                       record.has_ground_truth, **outcome)
+    return FrameResult(record.scene, condition, record.key, record.index, record.timestamp, record.ego_speed,
+                       record.token, record.has_ground_truth, **outcome)
 
 
 class ChunkProcessor:

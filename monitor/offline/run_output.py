@@ -17,9 +17,12 @@ not a run, is never written into without ``overwrite``; then only the run's own 
 (``run.json``, ``summary.md``, ``scenes/*.jsonl``, ``scenes/*.png``) are removed. The PNG and
 Markdown files are written whole or not at all (temporary file, then a rename).
 
-The shield runs here, over each scene's risks in order: it is the only part with state from
-frame to frame. A frame that could not be processed has status ``unprocessed``, its
-``error``, no risk and no shield decision (the shield keeps its state across it).
+The shield runs here, over each scene's frames in order (it is the only part with state from
+frame to frame), given each frame's risk, time, the ego's speed and the report's unseen and
+detected objects (for a path-gated shield); a resume replays it from the stored rows'
+``risk``, ``time``, ``ego_speed``, ``unseen`` and ``detected``. A frame that could not be
+processed has status ``unprocessed``, its ``error``, no risk and no shield decision (the
+shield keeps its state across it).
 """
 from __future__ import annotations
 
@@ -38,7 +41,7 @@ from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
 from monitor.risk_monitor import STATUSES
-from monitor.shield import Shield, check_ungated
+from monitor.shield import Shield
 
 RUN_FILE = "run.json"
 SUMMARY_FILE = "summary.md"
@@ -61,8 +64,9 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     """The JSON line of one frame.
 
     Fields: ``scene``, ``frame`` (index), ``key`` (file stem), ``token`` (nuScenes sample or
-    null), ``time`` (s), then the monitor's report (``risk``, ``status``, ``reason``,
-    ``iou``, ``rdd``, ``S``, ``P``, ``matched``, ``fired``, ``timings_ms``: see
+    null), ``time`` (s), ``ego_speed`` (m/s), then the monitor's report (``risk``, ``status``,
+    ``reason``, ``iou``, ``rdd``, ``S``, ``P``, ``matched``, ``fired``, ``free_distance``,
+    ``unseen``, ``detected``, ``timings_ms``: see
     :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
     ``counted``), ``target`` (1 - USC~; null without ground truth
@@ -70,7 +74,7 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
     row = {"scene": result.scene, "frame": result.index, "key": result.key, "token": result.token,
-           "time": result.timestamp}
+           "time": result.timestamp, "ego_speed": result.ego_speed}
     ob = result.observation
     if ob is None:
         return {**row, "risk": None, "status": UNPROCESSED, "error": result.error, "target": None,
@@ -83,6 +87,17 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     target = _number(ob.target) if result.has_ground_truth else None
     return {**row, **report.to_dict(), "alignment": alignment, "target": target,
             "shield": {"engaged": engaged, "deceleration": deceleration}}
+
+
+#: what a resume reads from a processed frame's line besides ``ego_speed``: what the shield
+#: replays from and the decision it must give again
+_REPLAYED = ("risk", "unseen", "detected", "shield")
+
+
+def _stored_rows(value):
+    """A line's ``unseen`` or ``detected`` as the shield takes it: None, or (k, 3) rows (an
+    empty list read back from JSON has lost its shape)."""
+    return np.empty((0, 3)) if isinstance(value, list) and not value else value
 
 
 def _digest_json(data) -> str:
@@ -147,7 +162,6 @@ class RunOutput:
     def __init__(self, out: str | Path, description: dict, plans: list[ScenePlan], shield: ShieldConfig,
                  *, overwrite: bool = False):
         self.out = Path(out)
-        check_ungated(shield, "fuzzrisk monitor")
         self.threshold = shield.threshold
         stems = {}
         for plan in plans:
@@ -219,10 +233,21 @@ class RunOutput:
         if got != expected:
             raise ValueError(f"{where}: is frame {got}, expected (scene, frame, key) = {expected}; "
                              "pass --overwrite")
-        if row.get("status") != UNPROCESSED:
-            decision = scene.shield.update(row["risk"])
-            if row.get("shield") != {"engaged": decision.engaged, "deceleration": decision.deceleration}:
-                raise ValueError(f"{where}: shield {row.get('shield')} does not replay (this run's shield "
+        processed = row.get("status") != UNPROCESSED
+        for name in ("ego_speed",) + (_REPLAYED if processed else ()):
+            if name not in row:
+                raise ValueError(f"{where}: has no {name!r} field, which a resume needs (a line of an older "
+                                 "fuzzrisk monitor?); pass --overwrite to start afresh")
+        if processed:
+            try:
+                decision = scene.shield.update(row["risk"], speed=row["ego_speed"],
+                                               unseen=_stored_rows(row["unseen"]),
+                                               detected=_stored_rows(row["detected"]), time=row["time"])
+            except (ValueError, TypeError) as exc:
+                raise ValueError(f"{where}: the shield cannot replay this line ({exc}); pass --overwrite") \
+                    from None
+            if row["shield"] != {"engaged": decision.engaged, "deceleration": decision.deceleration}:
+                raise ValueError(f"{where}: shield {row['shield']} does not replay (this run's shield "
                                  f"gives {decision}); pass --overwrite")
         scene.take(row)
 
@@ -246,7 +271,9 @@ class RunOutput:
             if result.observation is None:
                 row = report_row(result, None, None)
             else:
-                decision = scene.shield.update(result.observation.report.risk)
+                report = result.observation.report
+                decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
+                                               detected=report.detected, time=result.timestamp)
                 row = report_row(result, decision.engaged, decision.deceleration)
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)

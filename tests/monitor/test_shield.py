@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, check_ungated, consistent
+from monitor.shield import Shield, consistent
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -116,13 +116,6 @@ def test_the_gated_shield_refuses_missing_or_bad_inputs(speed, unseen, message):
 def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
         ShieldConfig(**{field: value})
-
-
-def test_commands_whose_shield_runs_on_the_risk_alone_refuse_a_gated_one():
-    assert check_ungated(ShieldConfig(), "this command") == ShieldConfig()
-    with pytest.raises(ValueError, match="shield.path_half_width = 1.25: this command runs the shield on "
-                                         "the risk alone; the path gate is wired into the closed loop only"):
-        check_ungated(GATED, "this command")
 
 
 # ------------------------------------------------------- the gate's confirmation and memory

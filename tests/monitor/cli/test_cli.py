@@ -5,6 +5,8 @@ import json
 import pytest
 
 from monitor.cli import main
+from monitor.config import load_config
+from shield_reference import GATE_YAML, gated_engaged
 
 
 def test_infer_prints_the_risk(capsys):
@@ -41,6 +43,22 @@ def test_demo_writes_its_reports(tmp_path, capsys):
     assert "synthetic" in report and "| nominal |" in report
     for name in ("fis.png", "risk_timeline.png", "retrieval_stages.png", "frame_nominal.png", "frame_night.png"):
         assert (out / name).stat().st_size > 1000
+
+
+def test_demo_runs_a_path_gated_shield(tmp_path):
+    config = tmp_path / "gate.yaml"
+    config.write_text(GATE_YAML)
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--scenes", "1", "--frames", "2", "--conditions", "nominal", "night",
+                 "--config", str(config)]) == 0
+    rows = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
+    c = load_config(config).shield
+    assert len(rows) == 4 and all(r["ego_speed"] > 0 for r in rows)  # the synthetic cars move
+    # the gate has no memory here (no hold, no hysteresis): each frame's decision from its row
+    assert [r["shield"]["engaged"] for r in rows] == [gated_engaged(r, c) for r in rows]
+    assert all(r["shield"]["deceleration"] == (c.deceleration if r["shield"]["engaged"] else 0.0) for r in rows)
+    # and it lets go of at least one frame the paper's shield brakes for (risk above the threshold)
+    assert any(r["risk"] > c.threshold and not r["shield"]["engaged"] for r in rows)
 
 
 def test_features_csv_has_one_row_per_frame_with_features(tmp_path, capsys):

@@ -1,5 +1,6 @@
 """fuzzrisk monitor on recording folders and synthetic scenes: outputs, resume, pool, errors."""
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
 from recording_fixture import read_rows, write_prior, write_recording
+from shield_reference import GATE_YAML, gated_engaged
 
 N_FRAMES = 10  # two chunks of 8 and 2 frames (monitor.offline.run.CHUNK_FRAMES)
 
@@ -47,10 +49,11 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
     shield = Shield(config.shield)
     for frame, row in zip(frames, rows):
         report = mon.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
-        decision = shield.update(report.risk)
-        assert (row["risk"], row["status"], row["time"], row["key"]) == (
-            report.risk, report.status, frame.timestamp, f"{frame.index:06d}")
+        decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen)
+        assert (row["risk"], row["status"], row["time"], row["ego_speed"], row["key"]) == (
+            report.risk, report.status, frame.timestamp, frame.ego_speed, f"{frame.index:06d}")
         assert row["S"] == report.S.tolist() and row["P"] == report.P.tolist()
+        assert row["unseen"] == report.unseen.tolist()
         assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
         assert [f["rule"] for f in row["fired"]] == [r + 1 for r, _, _ in report.fired]
         if report.alignment is not None:
@@ -139,7 +142,6 @@ def test_a_damaged_line_is_an_error_naming_it(recording, serial_run, tmp_path, c
 
 def test_unprocessable_frames_are_reported_and_strict_stops(recording, tmp_path, capsys):
     root, frames, prior = recording
-    import shutil
     rec = tmp_path / "drive-a"
     shutil.copytree(root / "drive-a", rec)
     np.save(rec / "depth" / "000004.npy", np.ones((90, 160), np.float32))  # wrong size
@@ -170,13 +172,102 @@ def test_synthetic_scenes_by_default(tmp_path):
     assert "synthetic" in (out / "summary.md").read_text()
 
 
-def test_a_path_gated_shield_is_refused(recording, tmp_path, capsys):
-    # this command's shield runs on the risk alone: a gate is refused up front, naming the
-    # setting, and nothing is written
-    config = tmp_path / "gate.yaml"
-    config.write_text("shield: {path_half_width: 1.25}\n")
+
+# --- a path-gated shield: given each frame's ego speed and unseen objects, replayed on a resume
+
+def _unseen(row: dict):
+    return None if row["unseen"] is None else np.array(row["unseen"], dtype=np.float64).reshape(-1, 3)
+
+
+def _gated_argv(recording, out, config, *extra):
+    # drive-b (3 frames, one chunk) first: its frames are where the gate decides (see below)
+    root, _, prior = recording
+    return ["monitor", "-o", str(out), "--recording", str(root / "drive-b"), str(root / "drive-a"),
+            "--prior", str(prior), "--config", str(config), *extra]
+
+
+@pytest.fixture(scope="module")
+def gated_run(recording, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("gated")
+    config = folder / "gate.yaml"
+    config.write_text(GATE_YAML)
+    assert main(_gated_argv(recording, folder / "out", config)) == 0
+    return folder / "out", config
+
+
+def test_a_gated_shield_gets_each_frames_speed_and_unseen_objects(recording, serial_run, gated_run):
+    root, _, _ = recording
+    out, config_path = gated_run
+    c = load_config(config_path).shield
+    assert c.path_half_width == 1.25 and c.hold_frames == 0
+    gated, plain = read_rows(out), read_rows(serial_run)
+    assert sorted(gated) == sorted(plain) == ["drive-a.jsonl", "drive-b.jsonl"]
+    for name in gated:
+        recorded = [json.loads(line)["ego_speed"] for line in
+                    (root / name.removesuffix(".jsonl") / "frames.jsonl").read_text().splitlines()]
+        assert [r["ego_speed"] for r in gated[name]] == recorded
+        shield = Shield(c)
+        for row, other in zip(gated[name], plain[name], strict=True):
+            # the gate changes the decisions only, never the reports
+            assert {k: v for k, v in row.items() if k != "shield"} == \
+                {k: v for k, v in other.items() if k != "shield"}
+            decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row))
+            assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
+            assert row["shield"]["engaged"] is gated_engaged(row, c)
+    # drive-b (rain) moves at 4.4 m/s with high risk from objects beside its path or beyond its
+    # reach (7.4 m): the paper's shield brakes there, the gated one does not
+    differ = [(row["shield"]["engaged"], other["shield"]["engaged"])
+              for row, other in zip(gated["drive-b.jsonl"], plain["drive-b.jsonl"])
+              if row["shield"] != other["shield"]]
+    assert differ and all(not engaged and plain_engaged for engaged, plain_engaged in differ)
+
+
+def test_an_interrupted_gated_run_resumes_to_the_same_lines(recording, gated_run, tmp_path, monkeypatch):
+    out, config = tmp_path / "out", gated_run[1]
+    real = monitor_command.process_chunks
+
+    def interrupted(*args, **kwargs):  # drive-b's chunk, then Ctrl-C
+        chunks = real(*args, **kwargs)
+        yield next(chunks)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(monitor_command, "process_chunks", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        main(_gated_argv(recording, out, config))
+    rows = read_rows(out)
+    assert len(rows["drive-b.jsonl"]) == 3 and rows["drive-a.jsonl"] == []
+    # the resume replays drive-b's decisions, which the risk alone does not give (test above)
+    monkeypatch.setattr(monitor_command, "process_chunks", real)
+    assert main(_gated_argv(recording, out, config)) == 0
+    assert read_rows(out) == read_rows(gated_run[0])
+
+
+def test_a_tampered_ego_speed_does_not_replay(recording, gated_run, tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(_argv(recording, out, "--config", str(config))) == 2
-    assert "shield.path_half_width = 1.25: fuzzrisk monitor runs the shield on the risk alone" in \
-        capsys.readouterr().err
-    assert not out.exists() or not any(out.iterdir())
+    shutil.copytree(gated_run[0], out)
+    assert main(_gated_argv(recording, out, gated_run[1])) == 0  # as it was, every line replays
+    c = load_config(gated_run[1]).shield
+    path = out / "scenes" / "drive-b.jsonl"
+    rows = [json.loads(line) for line in path.read_text().splitlines()]
+    # a frame the gated shield let go whose unseen object in the path would be within the reach
+    # at 20 m/s (400 / 6 + 10 + 2 = 78.7 m): with that speed stored it engages
+    n = next(k for k, r in enumerate(rows)
+             if not r["shield"]["engaged"] and gated_engaged({**r, "ego_speed": 20.0}, c))
+    rows[n]["ego_speed"] = 20.0
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert main(_gated_argv(recording, out, gated_run[1])) == 2
+    assert f"drive-b.jsonl: line {n + 1}: shield {{'engaged': False, 'deceleration': 0.0}} does not replay" \
+        in capsys.readouterr().err
+
+
+def test_lines_without_the_ego_speed_are_refused_naming_the_field(recording, serial_run, tmp_path, capsys):
+    # lines written before the rows carried the ego's speed: a resume cannot replay them
+    out = tmp_path / "out"
+    shutil.copytree(serial_run, out)
+    path = out / "scenes" / "drive-a.jsonl"
+    rows = [json.loads(line) for line in path.read_text().splitlines()]
+    del rows[0]["ego_speed"]
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert main(_argv(recording, out)) == 2
+    assert "drive-a.jsonl: line 1: has no 'ego_speed' field, which a resume needs (a line of an older " \
+           "fuzzrisk monitor?); pass --overwrite" in capsys.readouterr().err
