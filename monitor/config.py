@@ -202,41 +202,38 @@ class ShieldConfig:
         Metres from the ego origin (nuScenes': the rear axle) to the front bumper, where the
         reach starts.
     confirm_frames : int >= 1
-        With a path gate: an unseen object counts once the view has reported an unseen
-        object where it stands in this many consecutive frames (1: at once), as a tracker
-        confirms a track; a depth artefact rarely stands still for two frames.
-    memory_frames : int >= 0
-        With a path gate: an unseen object does not count when a detection stood where it
-        stands in at least ``memory_hits`` of the last ``memory_frames`` frames (0: no
-        memory): the car's tracker knows it through the frames its detector misses it.
-    memory_hits : int >= 1
-        See ``memory_frames``; at most ``memory_frames`` when that is > 0.
+        With a path gate: the hold applies only to an unseen object that stood where it
+        stands (a standing object, the ego's travel allowed for) in this many of the last
+        ``confirm_window`` frames, this one included; an unconfirmed one engages the shield
+        for its own frame alone (1: every one is held).
+    confirm_window : int >= confirm_frames
+        See ``confirm_frames``.
     """
 
     threshold: float = 0.5
     release: float = 0.5
-    hold_frames: int = 0
+    hold_frames: int = 5
     deceleration: float = 3.0
-    path_half_width: float | None = None
+    path_half_width: float | None = 1.25
     headway: float = 0.5
     margin: float = 2.0
     front: float = 3.8
     confirm_frames: int = 1
-    memory_frames: int = 0
-    memory_hits: int = 2
+    confirm_window: int = 1
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
         _set(self, "release", _unit(self.release, "release"))
         if self.release > self.threshold:
             raise ValueError(f"release = {self.release} must be <= threshold = {self.threshold}")
-        for name, least in (("hold_frames", 0), ("confirm_frames", 1), ("memory_frames", 0), ("memory_hits", 1)):
+        for name, least in (("hold_frames", 0), ("confirm_frames", 1), ("confirm_window", 1)):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < least:
                 raise ValueError(f"{name} = {value!r}, must be an integer >= {least}")
             _set(self, name, int(value))
-        if 0 < self.memory_frames < self.memory_hits:
-            raise ValueError(f"memory_hits = {self.memory_hits} must be <= memory_frames = {self.memory_frames}")
+        if self.confirm_window < self.confirm_frames:
+            raise ValueError(f"confirm_window = {self.confirm_window} must be >= confirm_frames = "
+                             f"{self.confirm_frames}")
         deceleration = _number(self.deceleration, "deceleration")
         if not (math.isfinite(deceleration) and deceleration > 0):
             raise ValueError(f"deceleration = {self.deceleration!r}, must be > 0 m/s^2")

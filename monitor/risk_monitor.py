@@ -52,7 +52,7 @@ from monitor.depth.prior import check_prior
 from monitor.depth.retrieval import InvalidDepthError, Retriever, as_depth_map
 from monitor.depth.visibility import check_view
 from monitor.geometry.arrays import finite_array
-from monitor.geometry.boxes3d import as_boxes3d, footprints
+from monitor.geometry.boxes3d import as_boxes3d
 from monitor.geometry.camera import Camera, project_boxes
 
 #: :attr:`RiskReport.status` of an assessed frame: the risk comes from the rule base.
@@ -111,11 +111,6 @@ class RiskReport:
         :meth:`~monitor.geometry.camera.Camera.ground_extents`); (0, 3) when the view found
         nothing; None for frames without a view (``invalid-input``, ``no-view``). The
         path-gated shield reads it (:class:`monitor.shield.Shield`).
-    detected : ndarray of shape (n, 3) or None
-        Where the detections the monitor kept (scoring at least
-        ``config.detections.min_score``) stand: per detection ``x, y_min, y_max`` in the ego
-        frame, metres (:func:`~monitor.geometry.boxes3d.footprints`); None for an
-        ``invalid-input`` frame. The path-gated shield's memory of detections reads it.
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
         ``alignment``, ``inference``.
@@ -132,7 +127,6 @@ class RiskReport:
     fired: list = field(default_factory=list)
     free_distance: float = float("nan")
     unseen: np.ndarray | None = None
-    detected: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -146,7 +140,6 @@ class RiskReport:
             "fired": [{"rule": r + 1, "text": t, "strength": s} for r, t, s in self.fired],
             "free_distance": None if np.isnan(self.free_distance) else self.free_distance,
             "unseen": None if self.unseen is None else self.unseen.tolist(),
-            "detected": None if self.detected is None else self.detected.tolist(),
             "timings_ms": {k: 1e3 * v for k, v in self.timings.items()},
         }
 
@@ -347,12 +340,12 @@ class RiskMonitor:
         timings["projection"] = t2 - t1
         chosen = self.config.alignment
         alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching)
-        unseen, detected = extents[~alignment.matched], footprints(boxes)
+        unseen = extents[~alignment.matched]
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:
             return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=blind,
-                              S=S, P=P, alignment=alignment, detected=detected, timings=timings)
+                              S=S, P=P, alignment=alignment, timings=timings)
         if alignment.n_objects == 0:
             seen = "" if np.isnan(free) else " (the corridor is free to its end)"
             return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
@@ -360,7 +353,7 @@ class RiskMonitor:
                                      f"{seen}: risk.no_objects = {self.config.risk.no_objects:g}, the "
                                      "configured risk of an empty view (not a measured zero)",
                               S=S, P=P, alignment=alignment, free_distance=free, unseen=unseen,
-                              detected=detected, timings=timings)
+                              timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
         if self.explain:  # one inference either way: the explanation carries the output
@@ -374,7 +367,7 @@ class RiskMonitor:
                               reason=f"no rule of {self.fis.name!r} fired for IoU~ = {iou:.6g}, "
                                      f"RDD~ = {rdd:.6g}: the rule base has no answer there",
                               iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, free_distance=free,
-                              unseen=unseen, detected=detected, timings=timings)
+                              unseen=unseen, timings=timings)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
                           alignment=alignment, fired=fired, free_distance=free, unseen=unseen,
-                          detected=detected, timings=timings)
+                          timings=timings)

@@ -20,13 +20,12 @@ itself brakes for a detected obstacle in its path within its stopping distance, 
 brakes for an unseen one. A frame without a view (``unseen`` None: an invalid frame or one
 the view cannot see through) is not gated: its fail-safe risk engages the shield as before.
 
-Two refinements of the gate make it a tracker's (both off by default): an unseen object
-counts only once it has stood where it stands for ``confirm_frames`` consecutive frames
-(depth artefacts flicker; objects stay), and not when a detection stood there in
-``memory_hits`` of the last ``memory_frames`` frames (the car's tracker coasts through the
-frames its detector misses an object it knows). "Where it stands" allows for the frames in
-between (:func:`consistent`): the ego's own travel, a relative error of the depth, and an
-object's own motion.
+A gate can hold only for what stays (``confirm_frames > 1``): an unseen object in the path
+engages the shield for its own frame at once, and the hold keeps it engaged only once the
+object is confirmed, standing where it stands (the ego's travel allowed for,
+:func:`consistent`) in ``confirm_frames`` of the last ``confirm_window`` frames, as a tracker
+confirms a track. Depth artefacts flicker from place to place and cost a frame each; an
+obstacle stays and is braked for to the end of the hold after its last sighting.
 
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
@@ -80,8 +79,8 @@ class Shield:
         """Forget the history (a new drive)."""
         self.engaged = False
         self._since_trigger = 0
-        c = self.config
-        self._history = deque(maxlen=max(c.confirm_frames - 1, c.memory_frames))  # (time, unseen, detected)
+        self._hold = self.config.hold_frames
+        self._history = deque(maxlen=self.config.confirm_window - 1)  # (time, unseen) of past frames
 
     def reach(self, speed: float) -> float:
         """Metres ahead of the front bumper in which an unseen object counts at ``speed``
@@ -90,7 +89,7 @@ class Shield:
         c = self.config
         return speed * speed / (2.0 * c.deceleration) + speed * c.headway + c.margin
 
-    def update(self, risk: float, speed: float | None = None, unseen=None, detected=None,
+    def update(self, risk: float, speed: float | None = None, unseen=None,
                time: float | None = None) -> ShieldDecision:
         """The decision for the next frame.
 
@@ -103,71 +102,57 @@ class Shield:
         unseen : ndarray of shape (k, 3) or None
             The report's :attr:`~monitor.RiskReport.unseen` (``x, y_min, y_max`` per object,
             ego frame, metres); None for a frame without a view. Read only with a path gate.
-        detected : ndarray of shape (n, 3) or None
-            The report's :attr:`~monitor.RiskReport.detected` (same columns); needed with a
-            memory (``memory_frames > 0``), None for a frame without detections to read.
         time : float, optional
-            The frame's time, seconds, increasing; needed with ``confirm_frames > 1`` or a
-            memory.
+            The frame's time, seconds, increasing; needed with a path gate that confirms
+            (``confirm_frames > 1``), ignored otherwise.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        in_path = c.path_half_width is None or self._in_path(speed, unseen, detected, time)
+        in_path, confirmed = (True, True) if c.path_half_width is None else self._in_path(speed, unseen, time)
         if math.isnan(risk) or (risk > c.threshold and in_path):
             self.engaged, self._since_trigger = True, 0
+            self._hold = c.hold_frames if (confirmed or math.isnan(risk)) else 0
         elif self.engaged:
             self._since_trigger += 1
-            if (risk <= c.release or not in_path) and self._since_trigger > c.hold_frames:
+            if (risk <= c.release or not in_path) and self._since_trigger > self._hold:
                 self.engaged = False
         return ShieldDecision(self.engaged, c.deceleration if self.engaged else 0.0, risk)
 
-    def _in_path(self, speed, unseen, detected, time) -> bool:
-        """An unseen object in the path within reach, confirmed and not known from the
-        memory of detections; or no view to tell (True)."""
+    def _in_path(self, speed, unseen, time) -> tuple[bool, bool]:
+        """Is an unseen object in the path within reach (or is there no view to tell), and
+        is one of those confirmed (or no view, or no confirmation asked)?"""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
             raise ValueError(f"speed = {speed!r}: a shield with a path gate needs the ego's speed, "
                              "a finite number of m/s >= 0")
-        unseen = _rows(unseen, "unseen", "RiskReport.unseen")
-        tracking = c.confirm_frames > 1 or c.memory_frames > 0
-        if tracking:
+        if unseen is not None:
+            unseen = np.asarray(unseen, dtype=np.float64)
+            if unseen.ndim != 2 or unseen.shape[1] != 3 or not np.isfinite(unseen).all():
+                raise ValueError(f"unseen has shape {unseen.shape}: expected finite (k, 3) rows "
+                                 "x, y_min, y_max (RiskReport.unseen)")
+        if c.confirm_frames > 1:
             if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time) \
                     or (self._history and not time > self._history[-1][0]):
                 last = f" (the last frame's was {self._history[-1][0]!r})" if self._history else ""
-                raise ValueError(f"time = {time!r}{last}: a shield with confirm_frames > 1 or a memory "
+                raise ValueError(f"time = {time!r}{last}: a shield whose gate confirms (confirm_frames > 1) "
                                  "needs each frame's time, finite seconds, increasing")
             time = float(time)
-        if c.memory_frames > 0:
-            if detected is None and unseen is not None:
-                raise ValueError("detected is None: a shield with a memory needs the report's detected "
-                                 "objects (RiskReport.detected) for every frame with a view")
-            detected = _rows(detected, "detected", "RiskReport.detected")
         if unseen is None:
-            answer = True
+            near, confirmed = None, True
         else:
             w = c.path_half_width
             x, y_min, y_max = unseen.T
             near = unseen[(x - c.front <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)]
-            past = list(self._history)
-            if c.confirm_frames > 1:
-                recent = past[-(c.confirm_frames - 1):]
-                if len(recent) < c.confirm_frames - 1:
-                    near = near[:0]
-                for t, then, _ in recent:
-                    near = near[consistent(near, then, time - t, speed)]
-            if c.memory_frames > 0 and past:
-                hits = np.sum([consistent(near, seen, time - t, speed) for t, _, seen in past[-c.memory_frames:]],
-                              axis=0)
-                near = near[hits < c.memory_hits]
-            answer = near.shape[0] > 0
-        if tracking:
-            empty = np.zeros((0, 3))
-            self._history.append((time, empty if unseen is None else unseen,
-                                  empty if detected is None else detected))
-        return answer
+            hits = np.zeros(near.shape[0], dtype=np.int64)
+            for t, then in self._history:
+                hits += consistent(near, then, time - t, speed)
+            confirmed = bool(np.any(hits >= c.confirm_frames - 1))
+        if c.confirm_frames > 1:
+            self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
+        return near is None or near.shape[0] > 0, confirmed
 
 
 #: Metres of depth error ``consistent`` allows at any distance.
@@ -179,7 +164,8 @@ OBJECT_SPEED = 2.0
 
 
 def consistent(now: np.ndarray, then: np.ndarray, dt: float, speed: float) -> np.ndarray:
-    """Does each object of ``now`` stand where one of ``then`` stood ``dt`` seconds before?
+    """Does each object of ``now`` stand where one of ``then`` stood ``dt`` seconds before,
+    if it stands still (or nearly)?
 
     Parameters
     ----------
@@ -188,31 +174,21 @@ def consistent(now: np.ndarray, then: np.ndarray, dt: float, speed: float) -> np
     dt : float
         Seconds between the two frames (> 0).
     speed : float
-        The ego's speed, m/s: in ``dt`` it travels ``speed * dt``.
+        The ego's speed, m/s: in ``dt`` it came ``speed * dt`` closer to what stands still.
 
     Returns
     -------
     ndarray of shape (k,), bool
-        True where some object of ``then`` has ``x`` between ``now``'s (moving with the
-        ego) and ``now``'s ``x + speed * dt`` (standing still: the ego came that much
-        closer), widened on each side by ``MATCH_ABS_M + MATCH_REL * x + OBJECT_SPEED * dt``, and a
-        lateral span that overlaps ``now``'s widened by ``MATCH_ABS_M + OBJECT_SPEED * dt``.
+        True where some object of ``then`` has ``x`` within ``MATCH_ABS_M + MATCH_REL * x
+        + OBJECT_SPEED * dt`` of ``now``'s ``x + speed * dt``, and a lateral span that
+        overlaps ``now``'s widened by ``MATCH_ABS_M + OBJECT_SPEED * dt``. Traffic moving
+        along with the ego drifts out of that over a few frames, as a depth artefact does
+        at once.
     """
     x, lo, hi = (now[:, k, None] for k in range(3))
     tol_x = MATCH_ABS_M + MATCH_REL * x + OBJECT_SPEED * dt
     tol_y = MATCH_ABS_M + OBJECT_SPEED * dt
     tx, tlo, thi = (then[None, :, k] for k in range(3))
-    along = (tx >= x - tol_x) & (tx <= x + speed * dt + tol_x)
+    along = np.abs(tx - (x + speed * dt)) <= tol_x
     across = (tlo <= hi + tol_y) & (thi >= lo - tol_y)
     return np.any(along & across, axis=1)
-
-
-def _rows(value, name: str, source: str):
-    """``value`` as finite (k, 3) float64 rows, or None."""
-    if value is None:
-        return None
-    rows = np.asarray(value, dtype=np.float64)
-    if rows.ndim != 2 or rows.shape[1] != 3 or not np.isfinite(rows).all():
-        raise ValueError(f"{name} has shape {rows.shape}: expected finite (k, 3) rows x, y_min, y_max "
-                         f"({source})")
-    return rows

@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         for frame in scene.frames:
             ob = observe(monitor, frame, scene.name, scene.condition)
             decision = shield.update(ob.report.risk, speed=frame.ego_speed, unseen=ob.report.unseen,
-                                     detected=ob.report.detected, time=frame.timestamp)
+                                     time=frame.timestamp)
             obs_by_condition.setdefault(scene.condition, []).append(ob)
             split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None

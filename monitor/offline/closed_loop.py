@@ -8,14 +8,16 @@ Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
    :func:`~monitor.synthetic.degrade.detect` degrade it and the detections under the
    scenario's condition;
 2. the **baseline** driver brakes at ``brake`` m/s^2 when a detection (score >= ``min_score``)
-   lies in its corridor within its stopping distance plus a margin in ``confirm_frames``
+   lies in its corridor within its stopping distance plus a margin (from the speed its brake
+   would act at, the commands already on their way acting first, and with the frames it
+   takes to confirm counted as reaction) in ``confirm_frames``
    consecutive frames (it sees only what its detector sees; one frame is not enough, as a
    tracker confirms a track) and keeps braking until nothing was in reach for
    ``release_frames`` frames (a track coasts through missed detections); otherwise it
    accelerates back to its cruise speed at ``comfort``;
 3. a **shielded** driver is the same driver plus the :class:`~monitor.RiskMonitor` on the same
-   frame and a :class:`~monitor.shield.Shield` (given the ego's speed and the report's unseen
-   objects, for a path-gated shield): the larger of the two decelerations wins;
+   frame and a :class:`~monitor.shield.Shield` (given the frame's time, the ego's speed and the
+   report's unseen objects, for a path-gated shield): the larger of the two decelerations wins;
 4. a command takes effect ``reaction`` seconds later (perception, decision and actuation).
 
 Drivers in one scenario (the baseline, the default shield, a sweep's settings) share the
@@ -146,11 +148,13 @@ def required_gap(speed: float, decel: float, reaction: float, hazard_speed: floa
 
 def in_reach(detections: np.ndarray, scores: np.ndarray, speed: float, driver: Driver) -> bool:
     """Is a detection (score >= ``min_score``) in the corridor within the stopping distance
-    plus the margin? Boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin)."""
+    at ``speed`` plus the margin, the frames it takes to confirm a track counted as reaction?
+    Boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin)."""
     feet = footprints(detections[scores >= driver.min_score])
     ahead = feet[:, 0] - EGO_FRONT_M
     in_path = (feet[:, 2] > -driver.corridor) & (feet[:, 1] < driver.corridor)
-    limit = reach(speed, driver.brake, driver.reaction, driver.margin)
+    # a detection confirmed confirm_frames - 1 frames from now: those frames' travel counts too
+    limit = reach(speed, driver.brake, driver.reaction + (driver.confirm_frames - 1) * driver.dt, driver.margin)
     return bool(np.any(in_path & (ahead > -1.0) & (ahead < limit)))
 
 
@@ -233,10 +237,12 @@ HISTORY_KEYS = ("time", "speed", "gap", "risk", "engaged", "decel")
 
 def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
-    for a path-gated shield."""
+    for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
+    if config.path_half_width is not None and config.confirm_frames > 1:
+        gate += f" c{config.confirm_frames}/{config.confirm_window}"
     return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 
@@ -334,9 +340,9 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and distance <= max_range:
                 onset = _onset(world, driver, shield_decel)
-            seen = in_reach(dets.boxes3d, dets.scores, world.ego.speed, driver)
             parts: dict[tuple, list] = {}
             for m in group:
+                seen = in_reach(dets.boxes3d, dets.scores, _acting_speed(world, m.queue, driver.dt), driver)
                 m.confirmed, m.missed = (m.confirmed + 1, 0) if seen else (0, m.missed + 1)
                 if m.confirmed >= driver.confirm_frames:
                     m.braking = True
@@ -346,7 +352,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 engaged = False
                 if m.shield is not None:
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
-                                               detected=report.detected, time=world.time)
+                                               time=world.time)
                     engaged, decel = decision.engaged, max(decel, decision.deceleration)
                 m.queue.append(-decel if decel > 0 else driver.comfort)
                 applied = m.queue.popleft()
@@ -373,6 +379,13 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     for run in runs:
         run.onset = onset
     return runs
+
+
+def _acting_speed(world: World, queue: deque, dt: float) -> float:
+    """The ego's speed when a command given now takes effect: the commands on their way
+    (m/s^2, one step of ``dt`` each) act first."""
+    speed = world.ego.speed + dt * sum(queue)
+    return min(max(speed, 0.0), max(world.ego.speed, world.ego.cruise))
 
 
 def _onset(world: World, driver: Driver, decel: float) -> dict:

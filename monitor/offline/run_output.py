@@ -18,11 +18,11 @@ not a run, is never written into without ``overwrite``; then only the run's own 
 Markdown files are written whole or not at all (temporary file, then a rename).
 
 The shield runs here, over each scene's frames in order (it is the only part with state from
-frame to frame), given each frame's risk, time, the ego's speed and the report's unseen and
-detected objects (for a path-gated shield); a resume replays it from the stored rows'
-``risk``, ``time``, ``ego_speed``, ``unseen`` and ``detected``. A frame that could not be
-processed has status ``unprocessed``, its ``error``, no risk and no shield decision (the
-shield keeps its state across it).
+frame to frame), given each frame's risk, time, the ego's speed and the report's unseen
+objects (for a path-gated shield); a resume replays it from the stored rows' ``risk``,
+``time``, ``ego_speed`` and ``unseen``. A frame that could not be processed has status
+``unprocessed``, its ``error``, no risk and no shield decision (the shield keeps its state
+across it).
 """
 from __future__ import annotations
 
@@ -66,7 +66,7 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     Fields: ``scene``, ``frame`` (index), ``key`` (file stem), ``token`` (nuScenes sample or
     null), ``time`` (s), ``ego_speed`` (m/s), then the monitor's report (``risk``, ``status``,
     ``reason``, ``iou``, ``rdd``, ``S``, ``P``, ``matched``, ``fired``, ``free_distance``,
-    ``unseen``, ``detected``, ``timings_ms``: see
+    ``unseen``, ``timings_ms``: see
     :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
     ``counted``), ``target`` (1 - USC~; null without ground truth
@@ -91,12 +91,12 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
 
 #: what a resume reads from a processed frame's line besides ``ego_speed``: what the shield
 #: replays from and the decision it must give again
-_REPLAYED = ("risk", "unseen", "detected", "shield")
+_REPLAYED = ("risk", "unseen", "shield")
 
 
-def _stored_rows(value):
-    """A line's ``unseen`` or ``detected`` as the shield takes it: None, or (k, 3) rows (an
-    empty list read back from JSON has lost its shape)."""
+def _stored_unseen(value):
+    """A line's ``unseen`` as the shield takes it: None, or (k, 3) rows (an empty list read
+    back from JSON has lost its shape)."""
     return np.empty((0, 3)) if isinstance(value, list) and not value else value
 
 
@@ -241,8 +241,7 @@ class RunOutput:
         if processed:
             try:
                 decision = scene.shield.update(row["risk"], speed=row["ego_speed"],
-                                               unseen=_stored_rows(row["unseen"]),
-                                               detected=_stored_rows(row["detected"]), time=row["time"])
+                                               unseen=_stored_unseen(row["unseen"]), time=row["time"])
             except (ValueError, TypeError) as exc:
                 raise ValueError(f"{where}: the shield cannot replay this line ({exc}); pass --overwrite") \
                     from None
@@ -273,7 +272,7 @@ class RunOutput:
             else:
                 report = result.observation.report
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
-                                               detected=report.detected, time=result.timestamp)
+                                               time=result.timestamp)
                 row = report_row(result, decision.engaged, decision.deceleration)
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)

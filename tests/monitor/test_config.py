@@ -48,7 +48,8 @@ def test_user_file_overrides_only_what_it_names(tmp_path):
                                           "max_range: 30\nrisk:\n  fail_safe: 0.9\n"
                                           "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
     assert config.alignment == AlignmentConfig(alpha=0.5, beta=1.0, weighting="mean", matching="coverage")
-    assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=0, deceleration=3.0)
+    assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=5, deceleration=3.0,
+                                         path_half_width=1.25)
     assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.5)
     assert config.detections == DetectionsConfig()
     assert config.max_range == 30.0 and isinstance(config.max_range, float)

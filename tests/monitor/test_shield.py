@@ -1,26 +1,31 @@
 """The controller shield: the paper's threshold, hysteresis and hold, built from its config section."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
 from monitor.shield import Shield, consistent
 
+#: the paper's shield: the risk alone decides, no hold
+PAPER = ShieldConfig(hold_frames=0, path_half_width=None)
+
 
 def test_shield_threshold_as_in_the_paper():
-    shield = Shield(ShieldConfig(threshold=0.5))
+    shield = Shield(PAPER)
     decisions = [shield.update(r).engaged for r in (0.2, 0.5, 0.51, 0.49, 0.9, 0.1)]
     assert decisions == [False, False, True, False, True, False]
 
 
 def test_shield_hysteresis_and_hold():
-    shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=1, deceleration=2.5))
+    shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=1, deceleration=2.5, path_half_width=None))
     risks = [0.7, 0.5, 0.35, 0.2, 0.2, 0.65, 0.1, 0.1]
     engaged = [shield.update(r).engaged for r in risks]
     # 0.7 engages; 0.5 and 0.35 stay engaged (above release 0.3); 0.2 releases (below 0.3,
     # 3 frames after the trigger > hold 1). 0.65 engages again; the first 0.1 is below release
     # but only 1 frame after the trigger (not > hold 1): still engaged; the second releases.
     assert engaged == [True, True, True, False, False, True, True, False]
-    plain = Shield(ShieldConfig(deceleration=2.5))
+    plain = Shield(replace(PAPER, deceleration=2.5))
     assert plain.update(0.9).deceleration == 2.5 and plain.update(0.0).deceleration == 0.0
 
 
@@ -28,21 +33,21 @@ def test_shield_from_the_configuration_section(tmp_path):
     path = tmp_path / "c.yaml"
     path.write_text("shield: {threshold: 0.7, release: 0.2, hold_frames: 2}\n")
     shield = Shield(load_config(path).shield)
-    assert shield.config == ShieldConfig(0.7, 0.2, 2, 3.0)
+    assert shield.config == ShieldConfig(0.7, 0.2, 2, 3.0)  # the gate's defaults kept
     assert Shield().config == load_config().shield
 
 
 def test_shield_treats_nan_as_danger_and_takes_numpy_numbers():
-    assert Shield().update(float("nan")).engaged
-    assert Shield().update(np.float32(0.6)).engaged and not Shield().update(np.float64(0.4)).engaged
-    held = Shield(ShieldConfig(hold_frames=np.int64(1)))
+    assert Shield(PAPER).update(float("nan")).engaged
+    assert Shield(PAPER).update(np.float32(0.6)).engaged and not Shield(PAPER).update(np.float64(0.4)).engaged
+    held = Shield(ShieldConfig(hold_frames=np.int64(1), path_half_width=None))
     assert [held.update(r).engaged for r in (0.9, 0.1, 0.1)] == [True, True, False]
 
 
 @pytest.mark.parametrize("risk", [None, "0.7", b"0.7", True, 0.5 + 0.1j, [0.7]])
 def test_update_refuses_what_is_not_a_risk(risk):
     with pytest.raises(ValueError, match=r"risk = .*expected a number \(a risk in \[0, 1\], or NaN\)"):
-        Shield().update(risk)
+        Shield(PAPER).update(risk)
 
 
 @pytest.mark.parametrize("config", ["0.5", 0.5, {"threshold": 0.5}, None])
@@ -53,8 +58,8 @@ def test_shield_refuses_what_is_not_a_shield_config(config):
 
 # ------------------------------------------------------------------------- the path gate
 
-GATED = ShieldConfig(threshold=0.5, deceleration=3.0, path_half_width=1.25, headway=0.5, margin=2.0,
-                     front=3.8)
+GATED = ShieldConfig(threshold=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
+                     margin=2.0, front=3.8)
 
 
 def test_reach_is_the_braking_distance_plus_headway_and_margin():
@@ -80,7 +85,7 @@ def test_the_path_gate_engages_only_for_an_unseen_object_in_the_path_within_reac
     # below the threshold nothing engages, whatever is unseen
     assert not Shield(GATED).update(0.4, 10.0, unseen).engaged
     # the paper's shield ignores the gate's inputs; NaN engages, gate or no gate
-    assert Shield(ShieldConfig()).update(0.8, 10.0, unseen).engaged
+    assert Shield(PAPER).update(0.8, 10.0, unseen).engaged
     assert Shield(GATED).update(float("nan"), 10.0, unseen).engaged
 
 
@@ -110,8 +115,8 @@ def test_the_gated_shield_refuses_missing_or_bad_inputs(speed, unseen, message):
     ("margin", float("inf"), "margin = inf, must be >= 0 metres"),
     ("front", -1.0, "front = -1.0, must be >= 0 metres"),
     ("confirm_frames", 0, "confirm_frames = 0, must be an integer >= 1"),
-    ("memory_frames", 1.5, "memory_frames = 1.5, must be an integer >= 0"),
-    ("memory_hits", 0, "memory_hits = 0, must be an integer >= 1"),
+    ("confirm_window", 1.5, "confirm_window = 1.5, must be an integer >= 1"),
+    ("confirm_frames", 2, "confirm_window = 1 must be >= confirm_frames = 2"),
 ])
 def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
@@ -122,10 +127,10 @@ def test_gate_settings_are_checked(field, value, message):
 
 def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion():
     now = np.array([[20.0, -0.5, 0.5]])
-    # dt 0.1 s at 10 m/s: the ego travels 1 m; x tolerance 0.5 + 0.15 * 20 + 2 * 0.1 = 3.7 m, so
-    # then-x may lie in [20 - 3.7, 20 + 1 + 3.7] = [16.3, 24.7]; y tolerance 0.5 + 0.2 = 0.7 m
-    for x_then, expected in ((21.0, True), (20.0, True), (24.69, True), (24.71, False), (16.31, True),
-                             (16.29, False)):
+    # dt 0.1 s at 10 m/s: the ego travels 1 m, so a standing object stood at 21 m; x tolerance
+    # 0.5 + 0.15 * 20 + 2 * 0.1 = 3.7 m: then-x in [17.3, 24.7]; y tolerance 0.5 + 0.2 = 0.7 m
+    for x_then, expected in ((21.0, True), (20.0, True), (24.69, True), (24.71, False), (17.31, True),
+                             (17.29, False)):
         assert consistent(now, np.array([[x_then, -0.5, 0.5]]), 0.1, 10.0)[0] is np.bool_(expected), x_then
     for span, expected in (((1.19, 2.0), True), ((1.21, 2.0), False), ((-3.0, -1.19), True),
                            ((-3.0, -1.21), False)):
@@ -137,61 +142,50 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
     assert consistent(now2, np.zeros((0, 3)), 0.1, 10.0).tolist() == [False, False]
 
 
-CONFIRMED = ShieldConfig(path_half_width=1.25, confirm_frames=2)
+CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3)
 
 
-def test_a_confirmed_gate_ignores_a_flicker_and_brakes_for_what_stays():
+def test_a_confirming_gate_holds_only_for_what_stays():
+    speed, dt, none = 10.0, 0.1, np.zeros((0, 3))
+    # artefacts in the path at 8 m, then 14 m: each engages its own frame, nothing holds (x
+    # tolerance at 14 m: 0.5 + 0.15 * 14 + 2 * 0.1 = 2.8 m around 14 + 1: [12.2, 17.8], no 8)
     shield = Shield(CONFIRMED)
-    speed, dt = 10.0, 0.1
-    # an artefact in the path at 8 m, then one at 14 m: the second is not where the first was
-    # (x tolerance at 14 m: 0.5 + 2.1 + 0.2 = 2.8 m; then-x should be in [11.2, 17.8])
-    flicker = [np.array([[8.0, -0.2, 0.2]]), np.array([[14.0, -0.2, 0.2]]), np.zeros((0, 3))]
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(flicker)] \
-        == [False, False, False]
-    # a standing object at 15 m, then 14 m (the ego came 1 m closer): engaged on the second frame
+    frames = [np.array([[8.0, -0.2, 0.2]]), np.array([[14.0, -0.2, 0.2]]), none, none]
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
+        == [True, True, False, False]
+    # a standing object at 15 m, missed by the view in the next frame, then at 13 m (the ego
+    # came 2 m closer in 0.2 s): 2 of the last 3 frames, confirmed; the hold of 3 frames keeps
+    # the shield engaged while the view misses it, and it releases on the 4th
     shield = Shield(CONFIRMED)
-    standing = [np.array([[15.0 - k, -0.2, 0.2]]) for k in range(3)]
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(standing)] \
-        == [False, True, True]
-    # a frame without a view is not gated, and tells nothing about where objects stand
+    frames = [np.array([[15.0, -0.2, 0.2]]), none, np.array([[13.0, -0.2, 0.2]]), none, none, none, none]
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
+        == [True, False, True, True, True, True, False]
+    # an object held at 5 m ahead while the ego moved 2 m in two frames moves along with it; a
+    # standing one stood at 5 + 2 = 7 m (tolerance 0.5 + 0.75 + 0.4 = 1.65 m): never confirmed
     shield = Shield(CONFIRMED)
-    assert shield.update(0.9, speed=speed, unseen=None, time=0.0).engaged
-    shield.reset()
-    assert not shield.update(0.9, speed=speed, unseen=standing[1], time=0.1).engaged
+    frames = [np.array([[5.0, -0.2, 0.2]]), none, np.array([[5.0, -0.2, 0.2]]), none]
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
+        == [True, False, True, False]
+    # a frame without a view is held (its fail-safe risk), and tells nothing about where objects stand
+    shield = Shield(CONFIRMED)
+    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged
+            for k, u in enumerate([None, none, none, none, none])] == [True, True, True, True, False]
 
 
-REMEMBERS = ShieldConfig(path_half_width=1.25, memory_frames=5, memory_hits=2)
+def test_without_confirmation_every_trigger_is_held():
+    shield = Shield(ShieldConfig(path_half_width=1.25, hold_frames=2))
+    frames = [np.array([[8.0, -0.2, 0.2]]), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))]
+    assert [shield.update(0.9, speed=10.0, unseen=u).engaged for u in frames] == [True, True, True, False]
 
 
-@pytest.mark.parametrize("detected_in, engaged", [
-    ((), True),           # never detected: unseen
-    ((1,), True),         # detected once in the last five frames: one hit < 2
-    ((1, 3), False),      # twice: the tracker knows it
-    ((1, 5), False),      # the frame just before counts too
-    ((0, 4), True),       # the frame six back has left the memory: one hit
+@pytest.mark.parametrize("time, message", [
+    (None, r"time = None: a shield whose gate confirms \(confirm_frames > 1\)"),
+    (float("nan"), "time = nan"),
+    (True, "time = True"),
 ])
-def test_a_gate_with_a_memory_leaves_to_the_car_what_it_detected_lately(detected_in, engaged):
-    shield = Shield(REMEMBERS)
-    car = np.array([[14.0, -0.9, 0.9]])  # a lead car holding its distance ahead in the path
-    none = np.zeros((0, 3))
-    for k in range(6):  # six frames with the car covered by a detection or not there at all
-        shield.update(0.2, speed=8.0, unseen=none, detected=car if k in detected_in else none, time=0.1 * k)
-    assert shield.update(0.9, speed=8.0, unseen=car, detected=none, time=0.6).engaged is engaged
-
-
-@pytest.mark.parametrize("config, kwargs, message", [
-    (CONFIRMED, {"unseen": np.zeros((0, 3))}, r"time = None: a shield with confirm_frames > 1"),
-    (CONFIRMED, {"unseen": np.zeros((0, 3)), "time": float("nan")}, "time = nan"),
-    (REMEMBERS, {"unseen": np.zeros((0, 3)), "time": 0.0}, "detected is None: a shield with a memory"),
-    (REMEMBERS, {"unseen": np.zeros((0, 3)), "time": 0.0, "detected": np.zeros((1, 2))},
-     r"detected has shape \(1, 2\)"),
-])
-def test_a_tracking_gate_refuses_missing_or_bad_inputs(config, kwargs, message):
+def test_a_confirming_gate_needs_the_frame_times(time, message):
     with pytest.raises(ValueError, match=message):
-        Shield(config).update(0.9, speed=5.0, **kwargs)
-
-
-def test_a_tracking_gate_needs_increasing_times():
+        Shield(CONFIRMED).update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=time)
     shield = Shield(CONFIRMED)
     shield.update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=1.0)
     with pytest.raises(ValueError, match=r"time = 1.0 \(the last frame's was 1.0\)"):

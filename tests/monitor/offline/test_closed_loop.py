@@ -94,12 +94,22 @@ def rare_objects_detected(monkeypatch):
         monkeypatch.setitem(DETECTOR_CLASSES, name, DetectorClass("pedestrian", 1.0, ("bicycle",)))
 
 
+def _paper(monitor):
+    """The paper's shield: the risk alone decides, no hold."""
+    return replace(monitor.config.shield, path_half_width=None, hold_frames=0)
+
+
 def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects_detected, perception, monitor):
     seed = _rare_seed("urban")
     spec = ScenarioSpec("rare-object", "nominal", seed)
     driver = Driver()
-    base, shielded = run_scenario(spec, perception, monitor, [monitor.config.shield], driver, condition=SHARP)
-    assert base.outcome == "stopped" and shielded.outcome == "stopped"
+    # the default shield, and the paper's at 0.4, which brakes in pulses before the obstacle
+    # is in the baseline's reach: the baseline sizes its reach on the speed its brake will act
+    # at, so the pulses' release cannot make it late
+    pulsing = replace(_paper(monitor), threshold=0.4, release=0.4)
+    base, *shielded = run_scenario(spec, perception, monitor, [monitor.config.shield, pulsing], driver,
+                                   condition=SHARP)
+    assert base.outcome == "stopped" and all(r.outcome == "stopped" for r in shielded)
     # the baseline's brake goes on delay_steps frames after the frame it decided in; from that
     # frame it covers v * reaction + v^2 / (2 brake) to standstill
     h = base.history
@@ -109,7 +119,7 @@ def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects
     assert h["speed"][first] == v  # cruising until the brake acts
     travelled = h["gap"][decided] - base.final_gap
     assert travelled == pytest.approx(v * 0.2 + v * v / 12.0, abs=1e-9)
-    assert base.final_gap > 0 and shielded.final_gap > 0
+    assert base.final_gap > 0 and all(r.final_gap > 0 for r in shielded)
 
 
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
@@ -123,7 +133,8 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
 
 
 def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_traffic(perception, monitor):
-    gated = replace(monitor.config.shield, path_half_width=1.25)
+    paper = _paper(monitor)
+    gated = replace(paper, path_half_width=1.25)
     # the same blind detector and obstacle: the obstacle stands in the path, the gate opens
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
@@ -134,8 +145,8 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     # gated one brakes only while something stands in the path within reach (a quarter of
     # the frames here) and arrives
     drive = ScenarioSpec("hazard-free", "nominal", 0)
-    _, paper, path = run_scenario(drive, perception, monitor, [monitor.config.shield, gated], condition=BLIND)
-    assert paper.engaged_frames == paper.frames and paper.outcome == "timeout"
+    _, alone, path = run_scenario(drive, perception, monitor, [paper, gated], condition=BLIND)
+    assert alone.engaged_frames == alone.frames and alone.outcome == "timeout"
     assert path.outcome == "arrived" and 0 < path.engaged_frames < 0.5 * path.frames
 
 
