@@ -1,11 +1,12 @@
 """The controller shield: turns the risk stream into a deceleration request (paper, Sec. IV-B).
 
 The paper's shield starts to decelerate the vehicle whenever the monitor's risk exceeds a
-threshold (0.5). :class:`Shield` adds two optional refinements against chattering on a
-noisy risk stream:
+threshold (0.5); it is ``ShieldConfig(path_half_width=None, hold_frames=0)``. The default
+is path-gated with a 5-frame hold (below; README, closed loop). :class:`Shield` adds two
+refinements against chattering on a noisy risk stream:
 
 - hysteresis: once engaged, it stays engaged until the risk falls to ``release`` or below
-  (``release == threshold``, the default, is the paper's plain threshold);
+  (``release == threshold``, the default, is none);
 - a hold: it stays engaged at least ``hold_frames`` frames after the last frame above the
   threshold.
 
@@ -51,20 +52,40 @@ class ShieldDecision:
     risk: float
 
 
+def describe(config: ShieldConfig) -> str:
+    """One line saying which shield ``config`` is, for reports: ``threshold 0.5, path gate
+    1.25 m, hold 5 frames``, or ``... the risk alone (the paper's)`` without a gate."""
+    parts = [f"threshold {config.threshold:g}"]
+    if config.release < config.threshold:
+        parts.append(f"release {config.release:g}")
+    if config.path_half_width is None:
+        parts.append("the risk alone (the paper's)")
+    else:
+        parts.append(f"path gate {config.path_half_width:g} m")
+    parts.append(f"hold {config.hold_frames} frames")
+    if config.path_half_width is not None and config.confirm_frames > 1:
+        parts[-1] += f" once confirmed in {config.confirm_frames} of {config.confirm_window}"
+    return ", ".join(parts)
+
+
 class Shield:
     """Risk in, deceleration request out, one frame at a time.
 
     Parameters
     ----------
     config : ShieldConfig, optional
-        Threshold, release, hold and deceleration (default: the paper's plain 0.5
-        threshold); the ``shield`` section of :class:`monitor.config.MonitorConfig`.
+        Threshold, release, hold, deceleration and path gate (default: the shipped
+        defaults); the ``shield`` section of :class:`monitor.config.MonitorConfig`.
 
     Examples
     --------
-    >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3))
+    >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=0, path_half_width=None))
     >>> shield.update(0.7).engaged, shield.update(0.4).engaged, shield.update(0.2).engaged
     (True, True, False)
+    >>> gated = Shield()  # in the path 12 m ahead, then beside it: the hold keeps 5 frames
+    >>> ahead, beside = [[12.0, -0.5, 0.5]], [[12.0, 2.0, 3.0]]
+    >>> [gated.update(0.8, speed=8.0, unseen=u).engaged for u in [ahead] + [beside] * 6]
+    [True, True, True, True, True, True, False]
     """
 
     def __init__(self, config: ShieldConfig = ShieldConfig()):

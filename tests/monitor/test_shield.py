@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, consistent
+from monitor.shield import Shield, consistent, describe
 
 #: the paper's shield: the risk alone decides, no hold
 PAPER = ShieldConfig(hold_frames=0, path_half_width=None)
@@ -190,3 +190,11 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
     shield.update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=1.0)
     with pytest.raises(ValueError, match=r"time = 1.0 \(the last frame's was 1.0\)"):
         shield.update(0.9, speed=5.0, unseen=np.zeros((0, 3)), time=1.0)
+
+
+def test_describe_names_the_shield():
+    assert describe(ShieldConfig()) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe(replace(PAPER, threshold=0.6, release=0.4)) == \
+        "threshold 0.6, release 0.4, the risk alone (the paper's), hold 0 frames"
+    assert describe(ShieldConfig(confirm_frames=2, confirm_window=3)) == \
+        "threshold 0.5, path gate 1.25 m, hold 5 frames once confirmed in 2 of 3"
