@@ -52,7 +52,7 @@ class ShieldDecision:
     risk: float
 
 
-def describe(config: ShieldConfig) -> str:
+def describe_shield(config: ShieldConfig) -> str:
     """One line saying which shield ``config`` is, for reports: ``threshold 0.5, path gate
     1.25 m, hold 5 frames``, or ``... the risk alone (the paper's)`` without a gate."""
     parts = [f"threshold {config.threshold:g}"]

@@ -33,7 +33,7 @@ from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
-from monitor.shield import Shield, describe
+from monitor.shield import Shield, describe_shield
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
     table = _summary(rows, obs_by_condition, fis)
     elapsed = time.perf_counter() - started
     print(SYNTHETIC_NOTE)
-    print(f"rule base: {rules_path} ({fis.name}); shield: {describe(config.shield)}")
+    print(f"rule base: {rules_path} ({fis.name}); shield: {describe_shield(config.shield)}")
     print(quality["title"])
     print(format_table(quality["rows"], _QUALITY))
     print(format_table(table, _COLUMNS))
@@ -197,7 +197,7 @@ def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) ->
         f"- Scenes: {bench.scenes_per_condition} per condition x {bench.n_frames} frames at 2 Hz, seed {bench.seed}; "
         f"prior from {bench.prior_scenes} separate nominal scenes.",
         f"- Matching: IoU > {config.alignment.alpha}, |RDD| < {config.alignment.beta}; objects within {config.max_range:g} m; "
-        f"shield: {describe(config.shield)}.",
+        f"shield: {describe_shield(config.shield)}.",
         f"- Run time: {elapsed:.1f} s.", "",
         "## Per condition", "",
         "risk: mean monitor risk; shield: share of frames with the shield engaged; 1-USC~: the ground-truth "

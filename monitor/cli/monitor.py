@@ -30,7 +30,7 @@ from monitor.offline.parallel import check_workers
 from monitor.offline.run import process_chunks
 from monitor.offline.run_output import COLUMNS, RunOutput
 from monitor.report.tables import format_table
-from monitor.shield import describe
+from monitor.shield import describe_shield
 from monitor.shipped import shipped_rules
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -93,7 +93,7 @@ def run(args: argparse.Namespace) -> int:
     finally:
         bar.close()
         elapsed = time.perf_counter() - started
-        notes = [selection.note, f"Rule base: {spec.rules}; shield: {describe(config.shield)}.",
+        notes = [selection.note, f"Rule base: {spec.rules}; shield: {describe_shield(config.shield)}.",
                  f"This run: {processed} frames in {elapsed:.1f} s"
                  + (f" ({processed / elapsed:.1f} frames/s)" if processed else "")
                  + (f"; {output.resumed} frames were done before (resumed)." if output.resumed else ".")]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from monitor.config import ShieldConfig, load_config
-from monitor.shield import Shield, consistent, describe
+from monitor.shield import Shield, consistent, describe_shield
 
 #: the paper's shield: the risk alone decides, no hold
 PAPER = ShieldConfig(hold_frames=0, path_half_width=None)
@@ -193,8 +193,8 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 
 def test_describe_names_the_shield():
-    assert describe(ShieldConfig()) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
-    assert describe(replace(PAPER, threshold=0.6, release=0.4)) == \
+    assert describe_shield(ShieldConfig()) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
         "threshold 0.6, release 0.4, the risk alone (the paper's), hold 0 frames"
-    assert describe(ShieldConfig(confirm_frames=2, confirm_window=3)) == \
+    assert describe_shield(ShieldConfig(confirm_frames=2, confirm_window=3)) == \
         "threshold 0.5, path gate 1.25 m, hold 5 frames once confirmed in 2 of 3"
