@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 from scipy.optimize import linprog
 
-from monitor.geometry.boxes3d import (as_boxes3d, box_corners, boxes3d_from_quaternions, transform_boxes)
+from monitor.geometry.boxes3d import (as_boxes3d, box_corners, boxes3d_from_quaternions, footprints,
+                                      transform_boxes)
 from monitor.geometry.camera import Camera, MIN_EXTENT_PX, project_boxes
 from monitor.geometry.poses import (invert_pose, pose_matrix, quaternion_to_rotation, transform_points, yaw_from_quaternion)
 
@@ -101,6 +102,19 @@ def test_box_corners_by_hand():
                 [0, 0, 6], [2, 0, 6], [2, 0, 0], [0, 0, 0]]
     np.testing.assert_allclose(corners[0], expected, atol=1e-12)
     assert box_corners(np.empty((0, 7))).shape == (0, 8, 3)
+
+
+def test_footprints_against_the_corners():
+    # a car ahead along x (l 4, w 2), the same turned 90 degrees, one at 30 degrees: the
+    # footprint is the ground rectangle's extent, the min x and the y span of its corners
+    boxes = as_boxes3d([[10, 0, 0.8, 2, 4, 1.6, 0], [10, 3, 0.8, 2, 4, 1.6, math.pi / 2],
+                        [20, -1, 0.8, 2, 4, 1.6, math.radians(30)]])
+    corners = box_corners(boxes)
+    expected = np.column_stack([corners[:, :, 0].min(axis=1), corners[:, :, 1].min(axis=1),
+                                corners[:, :, 1].max(axis=1)])
+    np.testing.assert_allclose(footprints(boxes), expected, atol=1e-12)
+    np.testing.assert_allclose(footprints(boxes)[:2], [[8, -1, 1], [9, 1, 5]], atol=1e-12)  # by hand
+    assert footprints(np.empty((0, 7))).shape == (0, 3)
 
 
 @pytest.mark.parametrize("boxes, message", [
