@@ -6,7 +6,7 @@ is path-gated with a 5-frame hold (below; README, closed loop). :class:`Shield` 
 refinements against chattering on a noisy risk stream:
 
 - hysteresis: once engaged, it stays engaged until the risk falls to ``release`` or below
-  (``release == threshold``, the default, is none);
+  (``release == threshold``, the default: no hysteresis);
 - a hold: it stays engaged at least ``hold_frames`` frames after the last frame above the
   threshold.
 
