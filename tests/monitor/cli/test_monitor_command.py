@@ -172,7 +172,6 @@ def test_synthetic_scenes_by_default(tmp_path):
     assert "synthetic" in (out / "summary.md").read_text()
 
 
-
 # --- a path-gated shield: given each frame's ego speed and unseen objects, replayed on a resume
 
 def _unseen(row: dict):
