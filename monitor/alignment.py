@@ -20,21 +20,35 @@ detection), which a view on an estimated depth map does all the time.
 (an object at 5 m counts four times one at 20 m: the nearer matters more to a car about
 to reach it); ``"mean"`` is the paper's plain mean.
 
-A frame without safety-critical objects (empty S) has no features: its means are NaN
-(:attr:`Alignment.n_objects` is 0). The caller must check; the NaN is there so that
-forgetting to cannot produce a confident number. (What the monitor reports for such a
-frame is its status ``no-objects``, see :mod:`monitor.risk_monitor`.)
+Which objects the means run over is ``objects``. ``"depth"`` is the paper's: the
+safety-critical objects S. ``"known"`` takes every object either view knows of within
+range, as the target 1 - USC~ takes every ground truth within range: each S no detection
+covers (IoU 0, RDD 1, as in the paper) and each detection within ``max_range`` (or
+partnering a counted S). A detection that counted S partner is scored by them (the largest
+of their IoU, the largest of their RDD: the depth view's word on it); one no counted S
+partners, one the depth view did not see or saw outside its corridor, scores IoU 1 and
+RDD 0, the detector's own word. The counted S themselves are not terms: their detections
+stand for them. So a frame in which the detector sees nine cars and the depth view finds
+one object it misses reads one unseen object in ten, where the paper's mean over S reads
+one in one: the detector's objects, which the depth view only partly finds, say how many
+objects the frame holds.
+
+A frame without any object to average over (empty S; with ``"known"``, also no detection
+within range) has no features: its means are NaN (:attr:`Alignment.n_terms` is 0). The
+caller must check; the NaN is there so that forgetting to cannot produce a confident
+number. (What the monitor reports for such a frame is its status ``no-objects``, see
+:mod:`monitor.risk_monitor`.)
 """
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from monitor import _alignment_kernels as _k
-from monitor.geometry.boxes import as_boxes, centre_distances
+from monitor.geometry.boxes import DEFAULT_RANGE_M, as_boxes, centre_distances, range_mask
 
 #: The paper's matching thresholds (Table I, second row).
 DEFAULT_ALPHA = 0.3
@@ -44,6 +58,8 @@ DEFAULT_BETA = 0.2
 WEIGHTINGS = ("mean", "inverse_distance")
 #: How S meets P: the paper's one-to-one pairs, or each S's coverage by the detections.
 MATCHINGS = ("hungarian", "coverage")
+#: Which objects IoU~ and RDD~ average over: the paper's S, or every object either view knows.
+OBJECTS = ("depth", "known")
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,13 +82,22 @@ class Alignment:
         The partner counts: ``pair_iou > alpha`` and ``|pair_rdd| < beta`` (coverage
         matching: ``pair_iou > alpha``, the depth test having chosen the P).
     iou_mean : float
-        IoU~, the mean over S of :attr:`iou`; NaN when S is empty.
+        IoU~, the mean of the per-object terms (``objects``); NaN when there are none.
     rdd_mean : float
-        RDD~, the mean over S of :attr:`rdd`; NaN when S is empty.
+        RDD~, likewise.
     alpha, beta : float
         The thresholds used.
     matching : str
         One of :data:`MATCHINGS`.
+    objects : str
+        One of :data:`OBJECTS`: what the means run over.
+    det_iou, det_rdd : ndarray of shape (N,), float64
+        With ``objects="known"``, each detection's terms: the largest IoU and the largest
+        RDD of the counted S partnering it, IoU 1 and RDD 0 where none does. Empty (0,)
+        with ``"depth"``.
+    det_counted : ndarray of shape (N,), bool
+        With ``"known"``, the detections that are terms: within range, or partnering a
+        counted S. Empty (0,) with ``"depth"``.
     """
 
     partner: np.ndarray
@@ -84,11 +109,23 @@ class Alignment:
     alpha: float
     beta: float
     matching: str = "hungarian"
+    objects: str = "depth"
+    det_iou: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    det_rdd: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    det_counted: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     @property
     def n_objects(self) -> int:
         """M, the number of safety-critical objects."""
         return self.partner.shape[0]
+
+    @property
+    def n_terms(self) -> int:
+        """How many per-object terms IoU~ and RDD~ average: M with ``objects="depth"``;
+        the S no detection covers plus the counted detections with ``"known"``."""
+        if self.objects == "depth":
+            return self.n_objects
+        return int((~self.matched).sum() + self.det_counted.sum())
 
     @property
     def iou(self) -> np.ndarray:
@@ -173,8 +210,21 @@ def check_matching(matching) -> str:
     return matching
 
 
+def check_objects(objects, weighting) -> str:
+    """Validate what the features average over (the one rule for it, also the
+    configuration's). ``"known"`` takes the plain mean only: a detection's distance may be
+    0 (a box around the ego origin), which has no inverse."""
+    if objects not in OBJECTS:
+        raise ValueError(f"objects = {objects!r}, must be one of {', '.join(OBJECTS)}")
+    if objects == "known" and weighting != "mean":
+        raise ValueError(f"objects = 'known' with weighting = {weighting!r}: the known objects "
+                         "take the plain mean only (weighting: mean)")
+    return objects
+
+
 def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
-          weighting: str = "mean", matching: str = "hungarian") -> Alignment:
+          weighting: str = "mean", matching: str = "hungarian", objects: str = "depth",
+          max_range: float = DEFAULT_RANGE_M) -> Alignment:
     """Align the safety-critical objects of one frame with the predictions.
 
     Parameters
@@ -196,22 +246,30 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     matching : str
         One of :data:`MATCHINGS`: ``"hungarian"`` (the paper) or ``"coverage"`` (see the
         module docstring).
+    objects : str
+        One of :data:`OBJECTS`: ``"depth"`` (the paper: the means run over S) or
+        ``"known"`` (over the S no detection covers and the detections within
+        ``max_range``; see the module docstring). ``"known"`` needs ``weighting="mean"``.
+    max_range : float
+        Metres: with ``"known"``, the detections with ``d <= max_range`` are terms
+        (:func:`monitor.geometry.boxes.range_mask`).
 
     Returns
     -------
     Alignment
-        ``iou_mean`` and ``rdd_mean`` are IoU~ and RDD~. Empty S gives NaN means; empty P
-        gives every S IoU 0 and RDD 1.
+        ``iou_mean`` and ``rdd_mean`` are IoU~ and RDD~, NaN when there is no term (empty S;
+        with ``"known"``, and no detection in range); empty P gives every S IoU 0 and RDD 1.
 
     Raises
     ------
     ValueError
         Invalid boxes (message names ``S`` or ``P``, the row and column), thresholds,
-        weighting or matching.
+        weighting, matching, objects or range.
     """
     alpha, beta = check_thresholds(alpha, beta)
     weighting = check_weighting(weighting)
     matching = check_matching(matching)
+    objects = check_objects(objects, weighting)
     S = as_boxes(S, "S", positive_depth=True)
     P = as_boxes(P, "P")
     m = S.shape[0]
@@ -224,16 +282,42 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     else:
         partner = _assign(S, P)
         _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
+    scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
+    if objects == "known":
+        det_iou, det_rdd, det_counted = _detection_terms(P, partner, pair_iou, pair_rdd,
+                                                         matched, max_range)
+        unseen = ~matched
+        n = int(unseen.sum() + det_counted.sum())
+        iou_mean = float(det_iou[det_counted].sum()) / n if n else float("nan")
+        rdd_mean = float(unseen.sum() + det_rdd[det_counted].sum()) / n if n else float("nan")
+        return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta,
+                         matching, objects, det_iou, det_rdd, det_counted)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
+    elif weighting == "inverse_distance":
+        w = 1.0 / S[:, 4]
+        iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
     else:
-        scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
-        if weighting == "inverse_distance":
-            w = 1.0 / S[:, 4]
-            iou_mean, rdd_mean = float(w @ scored_iou / w.sum()), float(w @ scored_rdd / w.sum())
-        else:
-            iou_mean, rdd_mean = float(scored_iou.mean()), float(scored_rdd.mean())
+        iou_mean, rdd_mean = float(scored_iou.mean()), float(scored_rdd.mean())
     return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta, matching)
+
+
+def _detection_terms(P: np.ndarray, partner: np.ndarray, pair_iou: np.ndarray,
+                     pair_rdd: np.ndarray, matched: np.ndarray, max_range: float
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each detection's IoU and RDD terms and whether it is one (``objects="known"``):
+    (N,) float64, (N,) float64, (N,) bool; see :attr:`Alignment.det_iou`."""
+    n = P.shape[0]
+    counted_pairs = matched & (partner >= 0)
+    rows = partner[counted_pairs]
+    seen = np.zeros(n, dtype=bool)
+    seen[rows] = True
+    det_iou = np.full(n, -np.inf)
+    det_rdd = np.full(n, -np.inf)
+    np.maximum.at(det_iou, rows, pair_iou[counted_pairs])
+    np.maximum.at(det_rdd, rows, pair_rdd[counted_pairs])
+    det_iou[~seen], det_rdd[~seen] = 1.0, 0.0
+    return det_iou, det_rdd, range_mask(P, max_range) | seen
 
 
 def warmup() -> None:

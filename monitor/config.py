@@ -25,7 +25,8 @@ from pathlib import Path
 from typing import Any
 
 from fuzzcore import strict_yaml
-from monitor.alignment import DEFAULT_ALPHA, check_matching, check_thresholds, check_weighting
+from monitor.alignment import (DEFAULT_ALPHA, check_matching, check_objects, check_thresholds,
+                               check_weighting)
 from monitor.depth.geometric import GeometricParams
 from monitor.depth.retrieval import RetrievalParams
 from monitor.depth.visibility import VisibilityParams
@@ -68,17 +69,21 @@ def _set(obj, name: str, value: Any) -> None:
 class AlignmentConfig:
     """How S meets P (``matching``, one of :data:`monitor.alignment.MATCHINGS`), the
     thresholds alpha and beta (their meaning per matching: :func:`monitor.alignment.align`),
-    and how the per-object terms become IoU~ and RDD~ (``weighting``, one of
-    :data:`monitor.alignment.WEIGHTINGS`).
+    how the per-object terms become IoU~ and RDD~ (``weighting``, one of
+    :data:`monitor.alignment.WEIGHTINGS`) and which objects they run over (``objects``, one
+    of :data:`monitor.alignment.OBJECTS`; the detections within the configuration's
+    ``max_range`` with ``"known"``).
 
     The rules for their values are :func:`monitor.alignment.check_thresholds`,
-    :func:`monitor.alignment.check_weighting` and :func:`monitor.alignment.check_matching`.
+    :func:`monitor.alignment.check_weighting`, :func:`monitor.alignment.check_matching`
+    and :func:`monitor.alignment.check_objects`.
     """
 
     alpha: float = DEFAULT_ALPHA
     beta: float = 1.0
     weighting: str = "mean"
     matching: str = "coverage"
+    objects: str = "known"
 
     def __post_init__(self):
         alpha, beta = check_thresholds(self.alpha, self.beta)
@@ -86,6 +91,7 @@ class AlignmentConfig:
         _set(self, "beta", beta)
         check_weighting(self.weighting)
         check_matching(self.matching)
+        check_objects(self.objects, self.weighting)
 
 
 @dataclass(frozen=True)

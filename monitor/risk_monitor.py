@@ -14,8 +14,10 @@ depth map that is not a real floating (H, W) array (masked arrays included) or i
 invalid, detections that are not finite real (n, 7) boxes of sane size and place, scores
 outside [0, 1], give a report with status ``invalid-input``, the reason, and the configured
 fail-safe risk (1.0 by default); the stages behind the check trust their input, so a bug in
-one of them raises instead of hiding in a report. A frame whose depth view finds nothing in
-range gives status ``no-objects`` and the configured ``risk.no_objects`` (a decision the
+one of them raises instead of hiding in a report. A frame without any object for the
+features to average over (the depth view finds nothing in range; with
+``alignment.objects: known``, the default, and no detection within range either) gives
+status ``no-objects`` and the configured ``risk.no_objects`` (a decision the
 report states: its reason names the risk and where it comes from, its ``free_distance`` how
 far the geometric view saw the corridor free), but only after a check that the view could
 see anything: a frame the depth view cannot see through gives status ``no-view`` and
@@ -57,7 +59,8 @@ from monitor.geometry.camera import Camera, project_boxes
 
 #: :attr:`RiskReport.status` of an assessed frame: the risk comes from the rule base.
 OK = "ok"
-#: Status of a frame whose depth view found no safety-critical object in range.
+#: Status of a frame without objects to assess: the depth view found nothing in range (and,
+#: with ``alignment.objects: known``, the detector nothing within range).
 NO_OBJECTS = "no-objects"
 #: Status of a frame the monitor could not assess: the risk is the fail-safe risk.
 INVALID_INPUT = "invalid-input"
@@ -323,8 +326,8 @@ class RiskMonitor:
             that fails these rules or whose depth map is more invalid than the depth view's
             ``max_invalid_fraction`` allows; ``no-view`` for a frame the depth view cannot see
             through (``config.visibility``, or the geometric view's own
-            :class:`~monitor.depth.geometric.BlindViewError`), ``no-objects`` when it sees
-            nothing in range, ``no-rule-fired`` when no rule covers the features.
+            :class:`~monitor.depth.geometric.BlindViewError`), ``no-objects`` when the
+            features have no object to average over, ``no-rule-fired`` when no rule covers the features.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()
@@ -339,19 +342,22 @@ class RiskMonitor:
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
         chosen = self.config.alignment
-        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching)
+        alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching,
+                          chosen.objects, self.config.max_range)
         unseen = extents[~alignment.matched]
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
         if blind:
             return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=blind,
                               S=S, P=P, alignment=alignment, timings=timings)
-        if alignment.n_objects == 0:
+        if alignment.n_terms == 0:
             seen = "" if np.isnan(free) else " (the corridor is free to its end)"
+            detected = " and no detection" if alignment.objects == "known" else ""
             return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
-                              reason=f"no safety-critical object within {self.config.max_range:g} m"
-                                     f"{seen}: risk.no_objects = {self.config.risk.no_objects:g}, the "
-                                     "configured risk of an empty view (not a measured zero)",
+                              reason=f"no safety-critical object{detected} within "
+                                     f"{self.config.max_range:g} m{seen}: risk.no_objects = "
+                                     f"{self.config.risk.no_objects:g}, the configured risk of an "
+                                     "empty view (not a measured zero)",
                               S=S, P=P, alignment=alignment, free_distance=free, unseen=unseen,
                               timings=timings)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean

@@ -327,3 +327,89 @@ def test_coverage_features_bounded(S, P, alpha, beta):
     assert 0.0 <= a.iou_mean <= 1.0 and -1.0 <= a.rdd_mean <= 1.0
     assert np.all((a.pair_iou >= 0.0) & (a.pair_iou <= 1.0))
     assert np.all((a.pair_rdd >= -1.0) & (a.pair_rdd <= 1.0))
+
+
+# ------------------------------------------------------------------ the known objects
+
+def test_known_objects_of_a_hand_made_frame():
+    # the coverage frame above, plus two detections the depth view did not see, one of them
+    # beyond the range limit
+    S = np.array([[100, 100, 40, 20, 10.0], [300, 100, 20, 20, 8.0], [500, 100, 20, 20, 5.0]])
+    P = np.array([[85, 100, 30, 20, 9.0], [115, 105, 30, 10, 12.0], [110, 100, 10, 20, 30.0],
+                  [310, 100, 30, 40, 20.0], [700, 100, 20, 20, 15.0], [800, 100, 20, 20, 25.0]])
+    a = align(S, P, alpha=0.3, beta=1.0, matching="coverage", objects="known", max_range=20.0)
+    depth = align(S, P, alpha=0.3, beta=1.0, matching="coverage")
+    # the per-S table is the same either way
+    np.testing.assert_array_equal(a.partner, depth.partner)
+    np.testing.assert_array_equal(a.pair_iou, depth.pair_iou)
+    np.testing.assert_array_equal(a.matched, [True, False, False])
+    # P0 partners the counted S0: its terms are S0's, 0.75 and -0.1; P1, P3 (20 m: within)
+    # and P4 partner no counted S: 1 and 0; P2 (30 m) and P5 (25 m) are out of range
+    np.testing.assert_allclose(a.det_iou, [0.75, 1, 1, 1, 1, 1])
+    np.testing.assert_allclose(a.det_rdd, [-0.1, 0, 0, 0, 0, 0])
+    np.testing.assert_array_equal(a.det_counted, [True, True, False, True, True, False])
+    # terms: the unseen S1 and S2 (0 and 1 each) and the four counted detections
+    assert a.n_terms == 6 and a.n_objects == 3
+    assert a.iou_mean == pytest.approx((0.75 + 3) / 6)
+    assert a.rdd_mean == pytest.approx((2 - 0.1) / 6)
+    assert (a.objects, depth.objects) == ("known", "depth") and depth.n_terms == 3
+    # a detection beyond the range still counts when it partners a counted S
+    far = P.copy()
+    far[0, 4] = 21.0  # RDD (21 - 10) / 10 = 1.1 -> 1 >= beta 1.0: P0 no longer takes part; with beta 2 it does
+    b = align(S, far, alpha=0.3, beta=2.0, matching="coverage", objects="known", max_range=20.0)
+    assert b.partner[0] == 0 and b.matched[0] and b.det_counted[0]
+
+
+def test_known_objects_take_the_largest_terms_of_the_s_partnering_a_detection():
+    # one detection over two objects side by side (a split view of one car, say)
+    S = np.array([[90, 100, 20, 20, 10.0], [110, 100, 20, 20, 12.0]])
+    P = np.array([[100, 100, 40, 20, 11.0]])
+    a = align(S, P, alpha=0.3, beta=0.2, objects="known", max_range=20.0)  # Hungarian pairs
+    # S0-P0: IoU 400 / 800 = 0.5, RDD 0.1 -> counts; S1 is left without a partner
+    np.testing.assert_array_equal(a.partner, [0, -1])
+    assert a.iou_mean == pytest.approx((0.5 + 0.0) / 2) and a.rdd_mean == pytest.approx((0.1 + 1.0) / 2)
+    cov = align(S, P, alpha=0.3, beta=0.2, matching="coverage", objects="known", max_range=20.0)
+    # coverage: both S inside P (1.0 each), RDD 0.1 and (11 - 12) / 12: one term, the largest
+    assert cov.matched.all() and cov.n_terms == 1
+    assert cov.iou_mean == pytest.approx(1.0) and cov.rdd_mean == pytest.approx(0.1)
+
+
+def test_known_objects_of_empty_frames():
+    P = np.array([[100, 100, 20, 20, 10.0]])
+    only_detections = align(EMPTY, P, objects="known", max_range=20.0)
+    assert only_detections.n_terms == 1 and (only_detections.iou_mean, only_detections.rdd_mean) == (1.0, 0.0)
+    nothing = align(EMPTY, np.array([[100, 100, 20, 20, 30.0]]), objects="known", max_range=20.0)
+    assert nothing.n_terms == 0 and np.isnan(nothing.iou_mean) and np.isnan(nothing.rdd_mean)
+    unseen = align(P, EMPTY, objects="known")
+    assert unseen.n_terms == 1 and (unseen.iou_mean, unseen.rdd_mean) == (0.0, 1.0)
+    with pytest.raises(ValueError, match="objects = 'all', must be one of depth, known"):
+        align(P, P, objects="all")
+    with pytest.raises(ValueError, match="objects = 'known' with weighting = 'inverse_distance'"):
+        align(P, P, objects="known", weighting="inverse_distance")
+
+
+def _known_reference(S, P, alpha, beta, matching, max_range):
+    """The known objects' features written out object by object."""
+    a = align(S, P, alpha, beta, matching=matching)  # the per-S table, the paper's population
+    terms = [(0.0, 1.0) for i in range(len(S)) if not a.matched[i]]
+    for j in range(len(P)):
+        mine = [i for i in range(len(S)) if a.matched[i] and a.partner[i] == j]
+        if mine:
+            terms.append((max(a.pair_iou[i] for i in mine), max(a.pair_rdd[i] for i in mine)))
+        elif P[j, 4] <= max_range:
+            terms.append((1.0, 0.0))
+    if not terms:
+        return math.nan, math.nan
+    return tuple(np.mean(terms, axis=0))
+
+
+@given(_frames(), _frames(), st.floats(0, 1), st.floats(0.01, 2), st.sampled_from(["hungarian", "coverage"]),
+       st.floats(1, 40))
+def test_known_objects_match_a_reference_and_stay_bounded(S, P, alpha, beta, matching, max_range):
+    a = align(S, P, alpha, beta, matching=matching, objects="known", max_range=max_range)
+    iou, rdd = _known_reference(S, P, alpha, beta, matching, max_range)
+    if math.isnan(iou):
+        assert a.n_terms == 0 and np.isnan(a.iou_mean) and np.isnan(a.rdd_mean)
+        return
+    assert a.iou_mean == pytest.approx(iou) and a.rdd_mean == pytest.approx(rdd)
+    assert 0.0 <= a.iou_mean <= 1.0 and -1.0 <= a.rdd_mean <= 1.0

@@ -47,7 +47,8 @@ def test_user_file_overrides_only_what_it_names(tmp_path):
     config = load_config(_write(tmp_path, "alignment: {alpha: 0.5}\nshield: {threshold: 0.6, release: 0.4}\n"
                                           "max_range: 30\nrisk:\n  fail_safe: 0.9\n"
                                           "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
-    assert config.alignment == AlignmentConfig(alpha=0.5, beta=1.0, weighting="mean", matching="coverage")
+    assert config.alignment == AlignmentConfig(alpha=0.5, beta=1.0, weighting="mean", matching="coverage",
+                                                objects="known")
     assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=5, deceleration=3.0,
                                          path_half_width=1.25)
     assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.5)
@@ -80,6 +81,9 @@ def test_an_empty_file_is_the_defaults(tmp_path):
     ("retrieval: {downsample: 2}\n", r"unknown key retrieval\.downsample; expected one of retrieval\.method"),
     ("alignment: {alpha: 2}\n", r"alignment\.alpha = 2\.0, expected an IoU threshold in \[0, 1\]"),
     ("alignment: {beta: 0}\n", r"alignment\.beta = 0\.0"),
+    ("alignment: {objects: all}\n", r"alignment\.objects = 'all', must be one of depth, known"),
+    ("alignment: {weighting: inverse_distance}\n",
+     r"alignment\.objects = 'known' with weighting = 'inverse_distance': .*\(weighting: mean\)"),
     ("shield: {threshold: 0.3, release: 0.4}\n", r"shield\.release = 0\.4 must be <= threshold = 0\.3"),
     ("shield: {hold_frames: 1.5}\n", r"shield\.hold_frames = 1\.5, must be an integer"),
     ("shield: {deceleration: -1}\n", r"shield\.deceleration = -1\.0, must be > 0"),

@@ -404,12 +404,16 @@ def test_coverage_reads_a_detected_group_as_covered_where_pairs_read_a_miss(fis,
     # height band: covered, the boxes' depths agree, so "iou high, rdd medium -> risk low"
     assert report.iou > 0.9 and abs(report.rdd) < 0.01 and report.risk < 0.35
     # the paper's one-to-one pairs give the group one pedestrian's box: IoU about 1/4 < 0.3,
-    # so the group counts as missed and the risk is the rule base's worst
-    pairs = replace(MonitorConfig(), alignment=replace(MonitorConfig().alignment, matching="hungarian",
-                                                       beta=0.2))
-    paired = RiskMonitor(fis, prior, CAMERA, pairs).step(depth, group)
+    # so the group counts as missed and, averaged over S as the paper does, the risk is the
+    # rule base's worst
+    paper = replace(MonitorConfig().alignment, matching="hungarian", beta=0.2, objects="depth")
+    paired = RiskMonitor(fis, prior, CAMERA, replace(MonitorConfig(), alignment=paper)).step(depth, group)
     assert 0.2 < paired.alignment.pair_iou[0] < 0.3 and not paired.alignment.matched[0]
     assert paired.iou == 0.0 and paired.rdd == 1.0 and paired.risk > 0.75
+    # over the known objects the same miss is one object in five (the four detections, none
+    # partnering a counted S, score IoU 1 and RDD 0): IoU~ 4/5, RDD~ 1/5
+    known = RiskMonitor(fis, prior, CAMERA, replace(MonitorConfig(), alignment=replace(paper, objects="known")))
+    assert known.step(depth, group).iou == pytest.approx(0.8) and known.step(depth, group).rdd == pytest.approx(0.2)
 
 
 def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monitor, monitor, scene_depth):

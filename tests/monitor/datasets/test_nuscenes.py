@@ -382,8 +382,11 @@ def test_features_command_runs_on_nuscenes(tmp_path, capsys):
     assert "Data: nuScenes v1.0-mini" in printed and "1 scenes (0 more not in the detections)" in printed
     with open(out) as f:
         rows = list(csv.DictReader(f))
-    # frame 0 has the painted car (the frame 1 depth map is empty: no features)
-    assert [(r["scene"], r["frame"], r["condition"]) for r in rows] == [("scene-0001", "0", "nuscenes")]
+    # frame 0 has the painted car, covered by its detection; the frame 1 depth map is empty,
+    # and its features come from the detector's objects alone (each IoU 1, RDD 0)
+    assert [(r["scene"], r["frame"], r["condition"]) for r in rows] == [("scene-0001", "0", "nuscenes"),
+                                                                      ("scene-0001", "1", "nuscenes")]
+    assert (float(rows[1]["iou"]), float(rows[1]["rdd"])) == (1.0, 0.0)
 
 
 def test_nuscenes_option_needs_its_companions(tmp_path, capsys):
