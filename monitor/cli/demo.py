@@ -80,6 +80,10 @@ _COLUMNS = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("ok",
             ("recall_s", "rec S", "{:.2f}"), ("recall_p", "rec P", "{:.2f}"), ("ms_per_frame", "ms/frame", "{:.1f}")]
 
 
+#: how the report names ``alignment.objects``
+_OBJECTS = {"known": "the known objects (the S no detection covers and the detections)",
+            "depth": "the depth view's objects S (the paper's)"}
+
 _QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
             ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
             ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
@@ -196,8 +200,9 @@ def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) ->
         f"- Rule base: `{rules_path}` ({fis.name}, {len(fis.rules)} rules, {fis.defuzzifier}).",
         f"- Scenes: {bench.scenes_per_condition} per condition x {bench.n_frames} frames at 2 Hz, seed {bench.seed}; "
         f"prior from {bench.prior_scenes} separate nominal scenes.",
-        f"- Matching: IoU > {config.alignment.alpha}, |RDD| < {config.alignment.beta}; objects within {config.max_range:g} m; "
-        f"shield: {describe_shield(config.shield)}.",
+        f"- Alignment: {config.alignment.matching} matching (alpha {config.alignment.alpha:g}, beta "
+        f"{config.alignment.beta:g}); features over {_OBJECTS[config.alignment.objects]} within "
+        f"{config.max_range:g} m; shield: {describe_shield(config.shield)}.",
         f"- Run time: {elapsed:.1f} s.", "",
         "## Per condition", "",
         "risk: mean monitor risk; shield: share of frames with the shield engaged; 1-USC~: the ground-truth "

@@ -69,7 +69,8 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     ``unseen``, ``timings_ms``: see
     :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
-    ``counted``), ``target`` (1 - USC~; null without ground truth
+    ``counted``; ``objects``, then per detection ``det_iou``, ``det_rdd``, ``det_counted``,
+    empty with ``objects`` "depth"; see :class:`monitor.alignment.Alignment`), ``target`` (1 - USC~; null without ground truth
     or none in range) and ``shield`` (``engaged``, ``deceleration`` m/s^2). An unprocessed
     frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
@@ -83,7 +84,9 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     a = report.alignment
     alignment = None if a is None else {"matching": a.matching, "partner": a.partner.tolist(),
                                         "iou": a.pair_iou.tolist(), "rdd": a.pair_rdd.tolist(),
-                                        "counted": a.matched.tolist()}
+                                        "counted": a.matched.tolist(), "objects": a.objects,
+                                        "det_iou": a.det_iou.tolist(), "det_rdd": a.det_rdd.tolist(),
+                                        "det_counted": a.det_counted.tolist()}
     target = _number(ob.target) if result.has_ground_truth else None
     return {**row, **report.to_dict(), "alignment": alignment, "target": target,
             "shield": {"engaged": engaged, "deceleration": deceleration}}
