@@ -9,8 +9,11 @@ Peers in the same run, on the same frame, answers checked before timing:
 - ``reference_loop``: ``scipy.spatial.distance.cdist`` + the assignment + a Python loop
   over the pairs (the straightforward implementation);
 - ``reference_numpy``: the same with the pair measures vectorised in NumPy;
-- ``align_coverage``: the monitor's default matching (each S's share inside the union of
-  the detections' boxes, exact; ``monitor.alignment``), against the paper's pairs above.
+- ``align_coverage``: coverage matching (each S's share inside the union of the
+  detections' boxes, exact; ``monitor.alignment``), means over S, against the paper's pairs
+  above;
+- ``align_known``: the monitor's defaults, coverage with the means over the known objects
+  (the S no detection covers and the detections within 20 m).
 """
 import time
 
@@ -105,6 +108,17 @@ def test_align_coverage(benchmark, warm_up_seconds):
     # 40 predictions lie on their objects: those objects are mostly covered
     assert 30 < a.matched.sum() <= 50 and np.all((a.pair_iou >= 0) & (a.pair_iou <= 1))
     benchmark(alignment.align, S, P, ALPHA, 1.0, "mean", "coverage")
+
+
+@pytest.mark.benchmark(group="align 50 S x 50 P", warmup=True)
+def test_align_known(benchmark, warm_up_seconds):
+    a = alignment.align(S, P, ALPHA, 1.0, matching="coverage", objects="known", max_range=20.0)
+    # the detections within 20 m, and those beyond partnering a counted S, are terms
+    partners = np.zeros(len(P), bool)
+    partners[a.partner[a.matched & (a.partner >= 0)]] = True
+    np.testing.assert_array_equal(a.det_counted, (P[:, 4] <= 20.0) | partners)
+    assert 0 < (P[:, 4] > 20.0).sum() and a.n_terms == (~a.matched).sum() + a.det_counted.sum()
+    benchmark(alignment.align, S, P, ALPHA, 1.0, "mean", "coverage", "known", 20.0)
 
 
 @pytest.mark.benchmark(group="align 50 S x 50 P", warmup=True)
