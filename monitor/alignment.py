@@ -24,10 +24,10 @@ Which objects the means run over is ``objects``. ``"depth"`` is the paper's: the
 safety-critical objects S. ``"known"`` takes every object either view knows of within
 range, as the target 1 - USC~ takes every ground truth within range: each S no detection
 covers (IoU 0, RDD 1, as in the paper) and each detection within ``max_range`` (or
-partnering a counted S). A detection that counted S partner is scored by them (the largest
-of their IoU, the largest of their RDD: the depth view's word on it); one no counted S
-partners, one the depth view did not see or saw outside its corridor, scores IoU 1 and
-RDD 0, the detector's own word. The counted S themselves are not terms: their detections
+partnering a counted S). A detection that counted S have as their partner is scored by
+them (the largest of their IoU, the largest of their RDD: the depth view's word on it); one
+that no counted S has, which the depth view did not see or saw outside its corridor, scores
+IoU 1 and RDD 0, the detector's own word. The counted S themselves are not terms: their detections
 stand for them. So a frame in which the detector sees nine cars and the depth view finds
 one object it misses reads one unseen object in ten, where the paper's mean over S reads
 one in one: the detector's objects, which the depth view only partly finds, say how many
@@ -282,7 +282,6 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     else:
         partner = _assign(S, P)
         _k.score_pairs(S, P, partner, alpha, beta, pair_iou, pair_rdd, matched)
-    scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
     if objects == "known":
         det_iou, det_rdd, det_counted = _detection_terms(P, partner, pair_iou, pair_rdd,
                                                          matched, max_range)
@@ -292,6 +291,7 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
         rdd_mean = float(unseen.sum() + det_rdd[det_counted].sum()) / n if n else float("nan")
         return Alignment(partner, pair_iou, pair_rdd, matched, iou_mean, rdd_mean, alpha, beta,
                          matching, objects, det_iou, det_rdd, det_counted)
+    scored_iou, scored_rdd = np.where(matched, pair_iou, 0.0), np.where(matched, pair_rdd, 1.0)
     if m == 0:
         iou_mean = rdd_mean = float("nan")
     elif weighting == "inverse_distance":
