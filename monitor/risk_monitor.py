@@ -327,7 +327,8 @@ class RiskMonitor:
             ``max_invalid_fraction`` allows; ``no-view`` for a frame the depth view cannot see
             through (``config.visibility``, or the geometric view's own
             :class:`~monitor.depth.geometric.BlindViewError`), ``no-objects`` when the
-            features have no object to average over, ``no-rule-fired`` when no rule covers the features.
+            features have no object to average over, ``no-rule-fired`` when no rule covers
+            the features.
         """
         timings: dict[str, float] = {}
         t0 = time.perf_counter()

@@ -70,8 +70,8 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
     ``counted``; ``objects``, then per detection ``det_iou``, ``det_rdd``, ``det_counted``,
-    empty with ``objects`` "depth"; see :class:`monitor.alignment.Alignment`), ``target`` (1 - USC~; null without ground truth
-    or none in range) and ``shield`` (``engaged``, ``deceleration`` m/s^2). An unprocessed
+    empty with ``objects`` "depth"; see :class:`monitor.alignment.Alignment`), ``target``
+    (1 - USC~; null without ground truth or none in range) and ``shield`` (``engaged``, ``deceleration`` m/s^2). An unprocessed
     frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
     row = {"scene": result.scene, "frame": result.index, "key": result.key, "token": result.token,

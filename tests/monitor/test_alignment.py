@@ -355,7 +355,7 @@ def test_known_objects_of_a_hand_made_frame():
     assert (a.objects, depth.objects) == ("known", "depth") and depth.n_terms == 3
     # a detection beyond the range still counts when it partners a counted S
     far = P.copy()
-    far[0, 4] = 21.0  # RDD (21 - 10) / 10 = 1.1 -> 1 >= beta 1.0: P0 no longer takes part; with beta 2 it does
+    far[0, 4] = 21.0  # RDD (21 - 10) / 10 -> 1: not < beta 1.0, P0 would take no part; beta 2 lets it
     b = align(S, far, alpha=0.3, beta=2.0, matching="coverage", objects="known", max_range=20.0)
     assert b.partner[0] == 0 and b.matched[0] and b.det_counted[0]
 

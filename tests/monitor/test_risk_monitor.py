@@ -412,8 +412,9 @@ def test_coverage_reads_a_detected_group_as_covered_where_pairs_read_a_miss(fis,
     assert paired.iou == 0.0 and paired.rdd == 1.0 and paired.risk > 0.75
     # over the known objects the same miss is one object in five (the four detections, none
     # partnering a counted S, score IoU 1 and RDD 0): IoU~ 4/5, RDD~ 1/5
-    known = RiskMonitor(fis, prior, CAMERA, replace(MonitorConfig(), alignment=replace(paper, objects="known")))
-    assert known.step(depth, group).iou == pytest.approx(0.8) and known.step(depth, group).rdd == pytest.approx(0.2)
+    known = replace(MonitorConfig(), alignment=replace(paper, objects="known"))
+    over_known = RiskMonitor(fis, prior, CAMERA, known).step(depth, group)
+    assert over_known.iou == pytest.approx(0.8) and over_known.rdd == pytest.approx(0.2)
 
 
 def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monitor, monitor, scene_depth):

@@ -57,15 +57,15 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
         assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
         assert [f["rule"] for f in row["fired"]] == [r + 1 for r, _, _ in report.fired]
         if report.alignment is not None:
-            a = report.alignment
-            assert row["alignment"]["partner"] == a.partner.tolist()
-            assert (row["alignment"]["objects"], row["alignment"]["det_counted"]) == ("known", a.det_counted.tolist())
-            # the features are the means of the stored terms: the S no detection covers, the counted detections
-            unseen, counted = ~np.array(row["alignment"]["counted"], bool), np.array(a.det_counted, bool)
+            stored = row["alignment"]
+            assert stored["partner"] == report.alignment.partner.tolist() and stored["objects"] == "known"
+            # the features are the means of the stored terms: the S no detection covers and
+            # the counted detections
+            unseen, counted = ~np.array(stored["counted"], bool), np.array(stored["det_counted"], bool)
             if row["status"] == "ok":
                 n = unseen.sum() + counted.sum()
-                assert row["iou"] == pytest.approx(np.array(row["alignment"]["det_iou"])[counted].sum() / n)
-                assert row["rdd"] == pytest.approx((unseen.sum() + np.array(row["alignment"]["det_rdd"])[counted].sum()) / n)
+                assert row["iou"] == pytest.approx(np.array(stored["det_iou"])[counted].sum() / n)
+                assert row["rdd"] == pytest.approx((unseen.sum() + np.array(stored["det_rdd"])[counted].sum()) / n)
         assert row["target"] is None or 0.0 <= row["target"] <= 1.0
     assert any(r["status"] == "ok" for r in rows)
     # drive-b has no ground_truth.jsonl: no target, never a made-up one
