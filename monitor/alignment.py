@@ -48,7 +48,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from monitor import _alignment_kernels as _k
-from monitor.geometry.boxes import DEFAULT_RANGE_M, as_boxes, centre_distances, range_mask
+from monitor.geometry.boxes import DEFAULT_RANGE_M, as_boxes, centre_distances, check_range
 
 #: The paper's matching thresholds (Table I, second row).
 DEFAULT_ALPHA = 0.3
@@ -251,8 +251,8 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
         ``"known"`` (over the S no detection covers and the detections within
         ``max_range``; see the module docstring). ``"known"`` needs ``weighting="mean"``.
     max_range : float
-        Metres: with ``"known"``, the detections with ``d <= max_range`` are terms
-        (:func:`monitor.geometry.boxes.range_mask`).
+        Metres, > 0: with ``"known"``, the detections with ``d <= max_range`` are terms
+        (:func:`monitor.geometry.boxes.check_range`).
 
     Returns
     -------
@@ -270,6 +270,7 @@ def align(S, P, alpha: float = DEFAULT_ALPHA, beta: float = DEFAULT_BETA,
     weighting = check_weighting(weighting)
     matching = check_matching(matching)
     objects = check_objects(objects, weighting)
+    max_range = check_range(max_range)
     S = as_boxes(S, "S", positive_depth=True)
     P = as_boxes(P, "P")
     m = S.shape[0]
@@ -317,7 +318,7 @@ def _detection_terms(P: np.ndarray, partner: np.ndarray, pair_iou: np.ndarray,
     np.maximum.at(det_iou, rows, pair_iou[counted_pairs])
     np.maximum.at(det_rdd, rows, pair_rdd[counted_pairs])
     det_iou[~seen], det_rdd[~seen] = 1.0, 0.0
-    return det_iou, det_rdd, range_mask(P, max_range) | seen
+    return det_iou, det_rdd, (P[:, 4] <= max_range) | seen
 
 
 def warmup() -> None:

@@ -242,7 +242,9 @@ def centre_distances(a, b) -> np.ndarray:
     return _k.centre_distances(as_boxes(a, "a"), as_boxes(b, "b"))
 
 
-def _check_range(max_range) -> float:
+def check_range(max_range) -> float:
+    """Validate a range limit (the one rule for it): a number of metres > 0, ``np.inf`` for
+    no limit. Returns it as a float; ValueError naming the value otherwise."""
     value = float(max_range)
     if not value > 0.0:  # also catches NaN
         raise ValueError(f"max_range = {max_range!r}, expected a distance > 0 metres "
@@ -263,7 +265,7 @@ def range_mask(boxes, max_range: float = DEFAULT_RANGE_M) -> np.ndarray:
     -------
     ndarray of shape (n,), bool
     """
-    return as_boxes(boxes, "boxes")[:, 4] <= _check_range(max_range)
+    return as_boxes(boxes, "boxes")[:, 4] <= check_range(max_range)
 
 
 def within_range(boxes, max_range: float = DEFAULT_RANGE_M) -> np.ndarray:

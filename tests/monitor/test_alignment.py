@@ -386,6 +386,8 @@ def test_known_objects_of_empty_frames():
         align(P, P, objects="all")
     with pytest.raises(ValueError, match="objects = 'known' with weighting = 'inverse_distance'"):
         align(P, P, objects="known", weighting="inverse_distance")
+    with pytest.raises(ValueError, match=r"max_range = -1, expected a distance > 0 metres"):
+        align(P, P, objects="known", max_range=-1)
 
 
 def _known_reference(S, P, alpha, beta, matching, max_range):
