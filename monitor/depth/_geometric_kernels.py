@@ -425,3 +425,76 @@ def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile, side_p
         stats[m, 8] = _percentile(side, side_percentile)
         stats[m, 9] = _percentile(side, 100.0 - side_percentile)
     return stats
+
+
+@kernel
+def surface_shape(labels, index, ds, stride, road_slope, contact_ratio, contact_blocks):
+    """Per chosen component: does it stand, or lie along the road with the road seen beneath?
+
+    ``labels`` int32 (rows, cols) from :func:`label_objects`; ``index`` int64 (n,) maps a
+    component to its row of the result (-1: not wanted); ``ds`` float32 (rows, cols)
+    camera depths (<= 0 or NaN: no point); a block's image row is ``(r + 0.5) * stride``
+    pixels; ``road_slope`` > 0 is the road plane's inverse depth gained per pixel down the
+    image (1 / m per px). Returns float64 (k, 2), k = ``index.max() + 1``, rows
+    ``incline, contact``:
+
+    - ``incline``: the least-squares slope of the component's inverse depths over its rows,
+      as a share of ``road_slope``: 0 for a face standing upright (one depth down its
+      rows), 1 for a patch of road, above 1 for a surface parallel to the road above it.
+      NaN when all its blocks lie in one row.
+    - ``contact``: over its columns, the share whose lowest block has road or another thing
+      right beneath it, no farther than ``contact_ratio`` times its depth: the largest
+      depth ratio among the first ``contact_blocks`` valid blocks below it. A column without
+      a valid block below is not counted (the image's edge, invalid pixels); NaN when no
+      column is counted.
+    """
+    rows, cols = ds.shape
+    k = 0
+    for m in range(index.shape[0]):
+        k = max(k, index[m] + 1)
+    sums = np.zeros((k, 5))  # blocks, sum v, sum v^2, sum q, sum v q
+    bottom = np.full((k, cols), -1, dtype=np.int64)
+    for r in range(rows):
+        v = (r + 0.5) * stride
+        for col in range(cols):
+            m = labels[r, col]
+            if m < 0 or index[m] < 0:
+                continue
+            j = index[m]
+            q = 1.0 / ds[r, col]
+            sums[j, 0] += 1.0
+            sums[j, 1] += v
+            sums[j, 2] += v * v
+            sums[j, 3] += q
+            sums[j, 4] += v * q
+            bottom[j, col] = r
+    out = np.full((k, 2), np.nan)
+    for m in range(index.shape[0]):
+        j = index[m]
+        if j < 0:
+            continue
+        n, sv, svv, sq, svq = sums[j, 0], sums[j, 1], sums[j, 2], sums[j, 3], sums[j, 4]
+        spread = n * svv - sv * sv
+        if spread > 1e-9 * n * svv:
+            out[j, 0] = (n * svq - sv * sq) / spread / road_slope
+        counted = 0
+        touching = 0
+        for col in range(cols):
+            r0 = bottom[j, col]
+            if r0 < 0:
+                continue
+            worst = -1.0
+            seen = 0
+            r = r0 + 1
+            while r < rows and seen < contact_blocks:
+                d = ds[r, col]
+                if d > 0.0:
+                    worst = max(worst, d / ds[r0, col])
+                    seen += 1
+                r += 1
+            if seen > 0:
+                counted += 1
+                touching += worst <= contact_ratio
+        if counted > 0:
+            out[j, 1] = touching / counted
+    return out

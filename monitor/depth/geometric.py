@@ -44,6 +44,17 @@ in the manner of the stereo-vision obstacle detectors:
    taller than any road vehicle) marks its ground cell and the cell's neighbours, and the
    obstacle blocks in marked cells are no obstacles. It works per cell, not per object, so
    a car parked against a wall keeps its own cells (off when ``structure_height`` is None).
+5. **What floats is no object.** In v-disparity an obstacle is a vertical segment (one
+   inverse depth down its rows) and the road an oblique line (the inverse depth grows
+   linearly down the image). A patch of road that a monocular network reads too near (a
+   reflection, a drop, a flake, image noise) rises above the plane like an obstacle, but it
+   stays a surface along the road: its inverse depth grows down the image as the road's
+   does or faster, and the road seen right beneath it is farther than it. An object whose
+   inverse depth grows by more than ``max_incline`` of the road's slope (a least-squares fit
+   over its blocks' rows) and that touches the road, or something in front of it, in fewer
+   than ``min_contact`` of its columns is dropped. Both tests are needed: the top of a low
+   box (debris) lies along the road but stands on it, and the raised rear of a trailer has
+   the road beneath it but is upright (off when ``max_incline`` is None).
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -79,6 +90,10 @@ from monitor.geometry.corridor import Corridor
 
 #: spacing of the corridor's centreline table along x, metres
 CORRIDOR_STEP_M = 0.1
+#: the road beneath an object touches it when no farther than this many times its depth ...
+CONTACT_RATIO = 1.2
+#: ... in the first this many valid blocks below it (a blurred edge between the two is one)
+CONTACT_BLOCKS = 3
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -178,6 +193,14 @@ class GeometricParams:
         Metres above the road (> ``max_height``): the ground cells under a block this high,
         and their neighbours, hold structure, not traffic (None: the rule is off). Road
         vehicles stay under 4.0 m in the EU, 4.1-4.3 m in North America.
+    max_incline : float or None
+        An object whose inverse depth grows down the image by more than this share of the
+        road's (> 0) lies along the road rather than standing on it; None: the rule is off.
+    min_contact : float
+        Share in [0, 1]: an object that lies along the road (``max_incline``) and stands on
+        the road or on something in front of it in fewer than this share of its columns
+        (the road beneath it seen no farther than ``CONTACT_RATIO`` times its depth) floats
+        above the road, and is not an object.
     """
 
     stride: int = 4
@@ -203,6 +226,8 @@ class GeometricParams:
     max_corridor_invalid_fraction: float = 0.5
     seed: int = 0
     structure_height: float | None = 4.2
+    max_incline: float | None = 0.5
+    min_contact: float = 0.35
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
@@ -231,12 +256,17 @@ class GeometricParams:
         if height is not None and not height > self.max_height:
             raise ValueError(f"structure_height = {height} and max_height = {self.max_height}: "
                              "structure_height must be above max_height (metres above the road)")
+        incline = self.max_incline
+        if incline is not None and not (isinstance(incline, (int, float)) and not isinstance(incline, bool)
+                                        and math.isfinite(incline) and incline > 0):
+            raise ValueError(f"max_incline = {incline!r}, must be a finite share of the road's "
+                             "inverse-depth slope > 0, or None (off)")
         if not 0 <= self.depth_percentile <= 100:
             raise ValueError(f"depth_percentile = {self.depth_percentile!r}, must be in [0, 100]")
         if not 0 <= self.max_tilt_deg < 45:
             raise ValueError(f"max_tilt_deg = {self.max_tilt_deg!r}, must be in [0, 45) degrees")
         for name in ("min_ground_fraction", "max_below_fraction", "max_invalid_fraction",
-                     "max_corridor_invalid_fraction"):
+                     "max_corridor_invalid_fraction", "min_contact"):
             value = getattr(self, name)
             if not 0 <= value <= 1:
                 raise ValueError(f"{name} = {value!r}, must be a share in [0, 1]")
@@ -445,6 +475,8 @@ class GeometricRetriever:
         boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
         keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
             & (boxes[:, 3] >= params.min_size)
+        if params.max_incline is not None and keep.any():
+            keep[keep] = ~self._floating(scratch.labels, keep, ds, ground)
         order = np.argsort(boxes[keep, 4], kind="stable")
         return GeometricView(
             boxes=boxes[keep][order],
@@ -457,6 +489,27 @@ class GeometricRetriever:
             corridor_valid_fraction=1.0 - corridor_invalid,
             below_ground_fraction=below,
         )
+
+    def _floating(self, labels, keep, ds, ground) -> np.ndarray:
+        """Which of the kept components (``keep``, bool (n,)) float above the road: lie along
+        it (``max_incline``) with the road seen beneath them (``min_contact``). bool (kept,).
+
+        The road plane ``z = a x + b y + c`` seen through the pixel ``(u, v)`` has the inverse
+        camera depth ``(r_z - a r_x - b r_y) / (a o_x + b o_y + c - o_z)``, with ``r = M (u,
+        v, 1)`` the pixel's ray per metre of camera depth and ``o`` the camera centre: affine
+        in the pixel, as v-disparity has it, with the slope down the image below.
+        """
+        a, b, c = ground
+        M, o = self._M, self._origin
+        road_slope = (M[2, 1] - a * M[0, 1] - b * M[1, 1]) / (a * o[0] + b * o[1] + c - o[2])
+        floating = np.zeros(int(keep.sum()), dtype=bool)
+        if not road_slope > 0:  # the image's rows do not run down the road: no rule to apply
+            return floating
+        index = np.full(keep.size, -1, dtype=np.int64)
+        index[keep] = np.arange(floating.size)
+        shape = kernels.surface_shape(labels, index, ds, self.params.stride, road_slope,
+                                      CONTACT_RATIO, CONTACT_BLOCKS)
+        return (shape[:, 0] > self.params.max_incline) & (shape[:, 1] < self.params.min_contact)
 
     def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
         """The road plane ``(a, b, c)`` and its support (share of all blocks), or the

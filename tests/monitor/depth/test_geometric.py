@@ -143,6 +143,58 @@ def test_what_rises_above_structure_height_is_taken_out_and_the_traffic_beside_i
     assert GeometricRetriever(CAMERA, GeometricParams(structure_height=4.2))(depth_truck).shape == (1, 5)
 
 
+# low on the road: the top of a box 0.3 m tall lies along the road but the box stands on it
+DEBRIS = [7.0, 0.0, 0.15, 0.6, 0.6, 0.3, 0.0]
+# a board 1 m tall hanging 0.5 m above the road (a trailer's raised rear): the road beneath
+# it is seen, but it stands upright
+RAISED_REAR = [11.0, 0.0, 1.0, 1.8, 0.2, 1.0, 0.0]
+
+
+def test_a_patch_of_road_read_too_near_floats_and_is_no_object_what_stands_stays():
+    road, _ = _render([])
+    off = GeometricParams(max_incline=None)
+    for factor in (0.5, 0.7):  # a blob 60-80 px tall, read at half or 0.7 of the road's depth
+        blob = road.copy()
+        blob[680:760, 700:900] *= np.float32(factor)
+        # it rises 0.45-0.75 m above the road: without the rule an obstacle ...
+        assert GeometricRetriever(CAMERA, off)(blob).shape == (1, 5)
+        # ... with it none: its inverse depth grows down the image 1 / factor times as fast
+        # as the road's, and the road beneath it is 1 / factor times farther
+        assert GeometricRetriever(CAMERA)(blob).shape == (0, 5)
+    # what stands on the road, or hangs upright above it, is kept as it was
+    boxes = [CAR_AHEAD, PEDESTRIAN, DEBRIS, RAISED_REAR]
+    depth, labels = _render(boxes)
+    ruled, plain = GeometricRetriever(CAMERA)(depth), GeometricRetriever(CAMERA, off)(depth)
+    np.testing.assert_array_equal(ruled, plain)
+    for k in range(len(boxes)):
+        assert _match(ruled, _truth(labels, depth, k))[1] > 0.3  # debris: its top 0.1 m only
+
+
+def test_surface_shape_by_hand():
+    rows, cols, stride, road = 12, 3, 4, 0.01
+    v = (np.arange(rows) + 0.5) * stride   # the block rows' pixel rows
+    labels = np.full((rows, cols), -1, np.int32)
+    labels[2:6, :] = 0                     # upright: one depth, 6 m, down its rows
+    labels[9:11, 1:] = 1                   # lying: its inverse depth grows 2x the road's slope
+    ds = np.full((rows, cols), 6.0, np.float32)
+    ds[9:11, 1:] = (1.0 / (0.1 + 2 * road * v[9:11]))[:, None]
+    ds[6, 0] = 6.6                         # under object 0: column 0 at 1.1 x its depth, then
+                                           # 6.0 and 6.0 (touches: the largest ratio is 1.1)
+    ds[6, 1], ds[7, 1] = 0.0, 9.0          # column 1: no point, then 1.5 x (does not touch)
+    ds[6, 2] = 8.0                         # column 2: 8 / 6 > 1.2 (does not)
+    ds[11, 1] = 1.0 / (0.1 + road * v[11])  # under object 1: column 1 the road, 1.7 x farther,
+    ds[11, 2] = ds[10, 2] * 1.1            # column 2 something at 1.1 x (touches)
+    out = kernels.surface_shape(labels, np.array([0, 1], np.int64), ds, stride, road, 1.2, 3)
+    assert out[0, 0] == pytest.approx(0.0, abs=1e-9) and out[0, 1] == pytest.approx(1 / 3)
+    assert out[1, 0] == pytest.approx(2.0, rel=1e-5) and out[1, 1] == pytest.approx(0.5)
+    # a component not wanted; one in a single row (no slope) with nothing below (no column
+    # counted)
+    one_row = np.full((rows, cols), -1, np.int32)
+    one_row[rows - 1, :] = 0
+    out = kernels.surface_shape(one_row, np.array([0, -1], np.int64), ds, stride, road, 1.2, 3)
+    assert out.shape == (1, 2) and np.isnan(out).all()
+
+
 def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
     depth, _ = _render([WALL, POLE])
     view = GeometricRetriever(CAMERA).view(depth)
@@ -489,6 +541,30 @@ def test_object_stats_equals_numpy():
     assert np.isnan(stats[5, 7:]).all()
 
 
+def test_surface_shape_equals_numpy():
+    rng = np.random.default_rng(9)
+    rows, cols, stride, road = 30, 20, 4, 0.004
+    labels = rng.integers(-1, 5, (rows, cols)).astype(np.int32)
+    ds = rng.uniform(2.0, 20.0, (rows, cols)).astype(np.float32)
+    ds[(rng.random((rows, cols)) < 0.1) & (labels < 0)] = np.nan  # no point
+    index = np.array([0, -1, 1, 2, 3], np.int64)                    # component 1 not wanted
+    out = kernels.surface_shape(labels, index, ds, stride, road, 1.2, 3)
+    for m, j in enumerate(index):
+        if j < 0:
+            continue
+        r, c = np.nonzero(labels == m)
+        slope = np.polyfit((r + 0.5) * stride, 1.0 / ds[r, c].astype(np.float64), 1)[0]
+        assert out[j, 0] == pytest.approx(slope / road, rel=1e-9, abs=1e-9)
+        touching = []
+        for col in np.unique(c):
+            low = r[c == col].max()
+            below = ds[low + 1:, col].astype(np.float64)
+            below = below[below > 0][:3]
+            if below.size:
+                touching.append(below.max() / ds[low, col] <= 1.2)
+        assert out[j, 1] == pytest.approx(np.mean(touching))
+
+
 # --------------------------------------------------------------------------- errors
 
 @pytest.mark.parametrize("field, value, text", [
@@ -503,6 +579,9 @@ def test_object_stats_equals_numpy():
     ("seed", -1, "seed = -1"),
     ("structure_height", 2.0, "structure_height must be above max_height"),
     ("structure_height", -1.0, r"structure_height = -1.0, must be a finite number of metres > 0 or None"),
+    ("max_incline", 0.0, r"max_incline = 0.0, must be a finite share .* > 0, or None"),
+    ("max_incline", True, "max_incline = True"),
+    ("min_contact", 1.5, r"min_contact = 1.5, must be a share in \[0, 1\]"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
