@@ -208,12 +208,15 @@ class ShieldConfig:
         Metres from the ego origin (nuScenes': the rear axle) to the front bumper, where the
         reach starts.
     confirm_frames : int >= 1
-        With a path gate: the hold applies only to an unseen object that stood where it
-        stands (a standing object, the ego's travel allowed for) in this many of the last
-        ``confirm_window`` frames, this one included; an unconfirmed one engages the shield
-        for its own frame alone (1: every one is held).
+        With a path gate: an unseen object narrower than ``confirm_width`` counts (engages
+        the shield, and the hold) only once confirmed: it stood where it stands (a standing
+        object, the ego's travel allowed for) in this many of the last ``confirm_window``
+        frames, this one included (1: every object counts at once).
     confirm_window : int >= confirm_frames
         See ``confirm_frames``.
+    confirm_width : float >= 0 or None
+        Metres: the lateral span (:attr:`monitor.RiskReport.unseen`'s ``y_max - y_min``)
+        under which an unseen object must be confirmed; None: every object must be.
     """
 
     threshold: float = 0.5
@@ -224,8 +227,9 @@ class ShieldConfig:
     headway: float = 0.5
     margin: float = 2.0
     front: float = 3.8
-    confirm_frames: int = 1
-    confirm_window: int = 1
+    confirm_frames: int = 2
+    confirm_window: int = 3
+    confirm_width: float | None = 0.3
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -250,6 +254,12 @@ class ShieldConfig:
                 raise ValueError(f"path_half_width = {self.path_half_width!r}, must be > 0 metres "
                                  "(or null: no path gate)")
             _set(self, "path_half_width", width)
+        if self.confirm_width is not None:
+            width = _number(self.confirm_width, "confirm_width")
+            if not (math.isfinite(width) and width >= 0):
+                raise ValueError(f"confirm_width = {self.confirm_width!r}, must be >= 0 metres "
+                                 "(or null: every unseen object is confirmed)")
+            _set(self, "confirm_width", width)
         for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
             value = _number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0):

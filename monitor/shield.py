@@ -21,12 +21,14 @@ itself brakes for a detected obstacle in its path within its stopping distance, 
 brakes for an unseen one. A frame without a view (``unseen`` None: an invalid frame or one
 the view cannot see through) is not gated: its fail-safe risk engages the shield as before.
 
-A gate can hold only for what stays (``confirm_frames > 1``): an unseen object in the path
-engages the shield for its own frame at once, and the hold keeps it engaged only once the
-object is confirmed, standing where it stands (the ego's travel allowed for,
-:func:`consistent`) in ``confirm_frames`` of the last ``confirm_window`` frames, as a tracker
-confirms a track. Depth artefacts flicker from place to place and cost a frame each; an
-obstacle stays and is braked for to the end of the hold after its last sighting.
+A gate asks more of small objects (``confirm_width``, ``confirm_frames``,
+``confirm_window``): an unseen object narrower than ``confirm_width`` counts only once it is
+confirmed, standing where it stands (the ego's travel allowed for, :func:`consistent`) in
+``confirm_frames`` of the last ``confirm_window`` frames, as a tracker confirms a track of
+weak evidence before acting on it. The depth artefacts of a monocular network (a patch of
+road read too near: a blob, a flake, a reflection) are small and flicker from place to
+place, so they engage nothing; a small obstacle stays and counts a frame or two later; a
+wide object counts at once.
 
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
@@ -64,7 +66,8 @@ def describe_shield(config: ShieldConfig) -> str:
         parts.append(f"path gate {config.path_half_width:g} m")
     parts.append(f"hold {config.hold_frames} frames")
     if config.path_half_width is not None and config.confirm_frames > 1:
-        parts[-1] += f" once confirmed in {config.confirm_frames} of {config.confirm_window}"
+        which = "objects" if config.confirm_width is None else f"objects under {config.confirm_width:g} m"
+        parts.append(f"{which} confirmed in {config.confirm_frames} of {config.confirm_window} frames")
     return ", ".join(parts)
 
 
@@ -82,10 +85,15 @@ class Shield:
     >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=0, path_half_width=None))
     >>> shield.update(0.7).engaged, shield.update(0.4).engaged, shield.update(0.2).engaged
     (True, True, False)
-    >>> gated = Shield()  # in the path 12 m ahead, then beside it: the hold keeps 5 frames
+    >>> gated = Shield()  # 1 m wide in the path 12 m ahead, then beside it: the hold keeps 5 frames
     >>> ahead, beside = [[12.0, -0.5, 0.5]], [[12.0, 2.0, 3.0]]
-    >>> [gated.update(0.8, speed=8.0, unseen=u).engaged for u in [ahead] + [beside] * 6]
+    >>> [gated.update(0.8, speed=8.0, unseen=u, time=0.1 * k).engaged
+    ...  for k, u in enumerate([ahead] + [beside] * 6)]
     [True, True, True, True, True, True, False]
+    >>> small = Shield()  # 0.1 m wide, 10 m ahead: counts once it stood there in 2 of 3 frames
+    >>> [small.update(0.8, speed=8.0, unseen=[[10.0 - 0.8 * k, 0.0, 0.1]], time=0.1 * k).engaged
+    ...  for k in range(3)]
+    [False, True, True]
     """
 
     def __init__(self, config: ShieldConfig = ShieldConfig()):
@@ -100,7 +108,6 @@ class Shield:
         """Forget the history (a new drive)."""
         self.engaged = False
         self._since_trigger = 0
-        self._hold = self.config.hold_frames
         self._history = deque(maxlen=self.config.confirm_window - 1)  # (time, unseen) of past frames
 
     def reach(self, speed: float) -> float:
@@ -125,25 +132,24 @@ class Shield:
             ego frame, metres); None for a frame without a view. Read only with a path gate.
         time : float, optional
             The frame's time, seconds, increasing; needed with a path gate that confirms
-            (``confirm_frames > 1``), ignored otherwise.
+            (``confirm_frames > 1``, the default), ignored otherwise.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        in_path, confirmed = (True, True) if c.path_half_width is None else self._in_path(speed, unseen, time)
+        in_path = True if c.path_half_width is None else self._in_path(speed, unseen, time)
         if math.isnan(risk) or (risk > c.threshold and in_path):
             self.engaged, self._since_trigger = True, 0
-            self._hold = c.hold_frames if (confirmed or math.isnan(risk)) else 0
         elif self.engaged:
             self._since_trigger += 1
-            if (risk <= c.release or not in_path) and self._since_trigger > self._hold:
+            if (risk <= c.release or not in_path) and self._since_trigger > c.hold_frames:
                 self.engaged = False
         return ShieldDecision(self.engaged, c.deceleration if self.engaged else 0.0, risk)
 
-    def _in_path(self, speed, unseen, time) -> tuple[bool, bool]:
-        """Is an unseen object in the path within reach (or is there no view to tell), and
-        is one of those confirmed (or no view, or no confirmation asked)?"""
+    def _in_path(self, speed, unseen, time) -> bool:
+        """Does an unseen object count in the path within reach (or is there no view to
+        tell)? One narrower than ``confirm_width`` counts only once confirmed."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
@@ -162,18 +168,24 @@ class Shield:
                                  "needs each frame's time, finite seconds, increasing")
             time = float(time)
         if unseen is None:
-            near, confirmed = None, True
+            counts = True
         else:
             w = c.path_half_width
             x, y_min, y_max = unseen.T
             near = unseen[(x - c.front <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)]
-            hits = np.zeros(near.shape[0], dtype=np.int64)
-            for t, then in self._history:
-                hits += consistent(near, then, time - t, speed)
-            confirmed = bool(np.any(hits >= c.confirm_frames - 1))
+            unconfirmed = np.zeros(near.shape[0], dtype=bool)
+            if c.confirm_frames > 1:  # the small ones not seen standing there often enough
+                width = math.inf if c.confirm_width is None else c.confirm_width
+                unconfirmed = near[:, 2] - near[:, 1] < width
+                if unconfirmed.any():
+                    hits = np.zeros(near.shape[0], dtype=np.int64)
+                    for t, then in self._history:
+                        hits += consistent(near, then, time - t, speed)
+                    unconfirmed &= hits < c.confirm_frames - 1
+            counts = bool(np.any(~unconfirmed))
         if c.confirm_frames > 1:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
-        return near is None or near.shape[0] > 0, confirmed
+        return counts
 
 
 #: Metres of depth error ``consistent`` allows at any distance.

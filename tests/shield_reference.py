@@ -1,8 +1,9 @@
 """The path-gated shield written out for the tests, from a report row (``fuzzrisk monitor``, the demo)."""
 from __future__ import annotations
 
-#: a configuration section with the gate, no hold and no hysteresis: a shield without memory
-GATE_YAML = "shield: {path_half_width: 1.25, hold_frames: 0}\n"
+#: a configuration section with the gate, no hold, no hysteresis and no confirmation: a
+#: shield without memory
+GATE_YAML = "shield: {path_half_width: 1.25, hold_frames: 0, confirm_frames: 1, confirm_window: 1}\n"
 
 
 def gated_engaged(row: dict, c) -> bool:

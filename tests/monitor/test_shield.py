@@ -59,7 +59,7 @@ def test_shield_refuses_what_is_not_a_shield_config(config):
 # ------------------------------------------------------------------------- the path gate
 
 GATED = ShieldConfig(threshold=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
-                     margin=2.0, front=3.8)
+                     margin=2.0, front=3.8, confirm_frames=1, confirm_window=1)
 
 
 def test_reach_is_the_braking_distance_plus_headway_and_margin():
@@ -116,7 +116,10 @@ def test_the_gated_shield_refuses_missing_or_bad_inputs(speed, unseen, message):
     ("front", -1.0, "front = -1.0, must be >= 0 metres"),
     ("confirm_frames", 0, "confirm_frames = 0, must be an integer >= 1"),
     ("confirm_window", 1.5, "confirm_window = 1.5, must be an integer >= 1"),
-    ("confirm_frames", 2, "confirm_window = 1 must be >= confirm_frames = 2"),
+    ("confirm_frames", 4, "confirm_window = 3 must be >= confirm_frames = 4"),
+    ("confirm_width", -0.1, r"confirm_width = -0.1, must be >= 0 metres \(or null"),
+    ("confirm_width", float("inf"), "confirm_width = inf, must be >= 0 metres"),
+    ("confirm_width", "narrow", "confirm_width = 'narrow', must be a number"),
 ])
 def test_gate_settings_are_checked(field, value, message):
     with pytest.raises(ValueError, match=message):
@@ -142,39 +145,51 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
     assert consistent(now2, np.zeros((0, 3)), 0.1, 10.0).tolist() == [False, False]
 
 
-CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3)
+CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
+                         confirm_width=0.3)
 
 
-def test_a_confirming_gate_holds_only_for_what_stays():
-    speed, dt, none = 10.0, 0.1, np.zeros((0, 3))
-    # artefacts in the path at 8 m, then 14 m: each engages its own frame, nothing holds (x
+def _engaged(config, frames, speed=10.0, dt=0.1):
+    shield = Shield(config)
+    return [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)]
+
+
+def test_a_confirming_gate_counts_a_small_object_once_it_stays():
+    none = np.zeros((0, 3))
+    # small artefacts (0.2 m wide) in the path at 8 m, then 14 m: neither is confirmed (x
     # tolerance at 14 m: 0.5 + 0.15 * 14 + 2 * 0.1 = 2.8 m around 14 + 1: [12.2, 17.8], no 8)
-    shield = Shield(CONFIRMED)
-    frames = [np.array([[8.0, -0.2, 0.2]]), np.array([[14.0, -0.2, 0.2]]), none, none]
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
-        == [True, True, False, False]
-    # a standing object at 15 m, missed by the view in the next frame, then at 13 m (the ego
-    # came 2 m closer in 0.2 s): 2 of the last 3 frames, confirmed; the hold of 3 frames keeps
-    # the shield engaged while the view misses it, and it releases on the 4th
-    shield = Shield(CONFIRMED)
-    frames = [np.array([[15.0, -0.2, 0.2]]), none, np.array([[13.0, -0.2, 0.2]]), none, none, none, none]
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
-        == [True, False, True, True, True, True, False]
-    # an object held at 5 m ahead while the ego moved 2 m in two frames moves along with it; a
-    # standing one stood at 5 + 2 = 7 m (tolerance 0.5 + 0.75 + 0.4 = 1.65 m): never confirmed
-    shield = Shield(CONFIRMED)
-    frames = [np.array([[5.0, -0.2, 0.2]]), none, np.array([[5.0, -0.2, 0.2]]), none]
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)] \
-        == [True, False, True, False]
+    assert _engaged(CONFIRMED, [np.array([[8.0, -0.1, 0.1]]), np.array([[14.0, -0.1, 0.1]]), none, none]) \
+        == [False, False, False, False]
+    # a small standing object at 15 m, missed by the view in the next frame, then at 13 m (the
+    # ego came 2 m closer in 0.2 s): 2 of the last 3 frames, confirmed; the hold of 3 frames
+    # keeps the shield engaged while the view misses it, and it releases on the 4th
+    assert _engaged(CONFIRMED, [np.array([[15.0, -0.1, 0.1]]), none, np.array([[13.0, -0.1, 0.1]]),
+                                none, none, none, none]) == [False, False, True, True, True, True, False]
+    # a small object held at 5 m ahead while the ego moved 2 m in two frames moves along with
+    # it; a standing one stood at 5 + 2 = 7 m (tolerance 0.5 + 0.75 + 0.4 = 1.65 m): never confirmed
+    small_at_5 = np.array([[5.0, -0.1, 0.1]])
+    assert _engaged(CONFIRMED, [small_at_5, none, small_at_5, none]) == [False, False, False, False]
+    # an object 0.3 m wide (not under confirm_width) counts at once and is held
+    assert _engaged(CONFIRMED, [np.array([[8.0, 0.0, 0.3]]), none, none, none, none]) == \
+        [True, True, True, True, False]
+    # beside a small unconfirmed one, a wide one counts
+    assert _engaged(CONFIRMED, [np.array([[8.0, -0.1, 0.1], [9.0, 0.5, 1.5]])]) == [True]
     # a frame without a view is held (its fail-safe risk), and tells nothing about where objects stand
-    shield = Shield(CONFIRMED)
-    assert [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged
-            for k, u in enumerate([None, none, none, none, none])] == [True, True, True, True, False]
+    assert _engaged(CONFIRMED, [None, none, none, none, none]) == [True, True, True, True, False]
+
+
+def test_the_confirmation_width_bounds_what_must_be_confirmed():
+    wide = [np.array([[15.0, -1.0, 1.0]]), np.array([[14.0, -1.0, 1.0]])]
+    assert _engaged(CONFIRMED, wide) == [True, True]
+    assert _engaged(replace(CONFIRMED, confirm_width=None), wide) == [False, True]  # every object
+    small = [np.array([[8.0, -0.1, 0.1]])]
+    assert _engaged(replace(CONFIRMED, confirm_width=0.0), small) == [True]  # none
+    assert _engaged(replace(CONFIRMED, confirm_frames=1), small) == [True]  # no confirmation asked
 
 
 def test_without_confirmation_every_trigger_is_held():
-    shield = Shield(ShieldConfig(path_half_width=1.25, hold_frames=2))
-    frames = [np.array([[8.0, -0.2, 0.2]]), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))]
+    shield = Shield(ShieldConfig(path_half_width=1.25, hold_frames=2, confirm_frames=1, confirm_window=1))
+    frames = [np.array([[8.0, -0.1, 0.1]]), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))]
     assert [shield.update(0.9, speed=10.0, unseen=u).engaged for u in frames] == [True, True, True, False]
 
 
@@ -193,8 +208,10 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 
 def test_describe_names_the_shield():
-    assert describe_shield(ShieldConfig()) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe_shield(ShieldConfig()) == \
+        "threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
         "threshold 0.6, release 0.4, the risk alone (the paper's), hold 0 frames"
-    assert describe_shield(ShieldConfig(confirm_frames=2, confirm_window=3)) == \
-        "threshold 0.5, path gate 1.25 m, hold 5 frames once confirmed in 2 of 3"
+    assert describe_shield(ShieldConfig(confirm_frames=1)) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe_shield(ShieldConfig(confirm_width=None)) == \
+        "threshold 0.5, path gate 1.25 m, hold 5 frames, objects confirmed in 2 of 3 frames"

@@ -49,7 +49,8 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
     shield = Shield(config.shield)
     for frame, row in zip(frames, rows):
         report = mon.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
-        decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen)
+        decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen,
+                                 time=frame.timestamp)
         assert (row["risk"], row["status"], row["time"], row["ego_speed"], row["key"]) == (
             report.risk, report.status, frame.timestamp, frame.ego_speed, f"{frame.index:06d}")
         assert row["S"] == report.S.tolist() and row["P"] == report.P.tolist()
