@@ -125,11 +125,17 @@ def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     seed = _rare_seed("parking")
     spec = ScenarioSpec("rare-object", "nominal", seed)
-    base, shielded = run_scenario(spec, perception, monitor, [monitor.config.shield], condition=BLIND)
+    every = replace(monitor.config.shield, confirm_width=None)  # every object confirmed first
+    base, shielded, confirming = run_scenario(spec, perception, monitor, [monitor.config.shield, every],
+                                              condition=BLIND)
     assert base.collided and base.braking_frames == 0
     assert base.impact_speed == pytest.approx(base.cruise)  # nothing braked it
     assert base.onset is not None and base.onset["avoidable"]
     assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
+    # the obstacle stands where it stood, seen before it came within reach: confirmed by then
+    # (here in the same frame), at most two frames later, and avoided
+    first = [r.history["engaged"].index(True) for r in (shielded, confirming)]
+    assert not confirming.collided and first[0] <= first[1] <= first[0] + 2
 
 
 def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_traffic(perception, monitor):
