@@ -216,8 +216,8 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
               f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s).", "",
               "## Hazards (baseline collisions avoided by the shield)", "",
               "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
-              "unavoidable | impact v (shield) | shield-only | rear-ended |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "avoidable, detector missed: avoided | unavoidable | impact v (shield) | shield-only | rear-ended |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     rows = []
     for kind, by_condition in summary["by_kind_condition"].items():
         if kind == "hazard-free":
@@ -226,6 +226,7 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
             rows.append(f"| {kind} | {condition} | {m['runs']} | {_pct(m['baseline_collision_rate'])} | "
                         f"{_pct(m['shielded_collision_rate'])} | {_pct(m['avoidance_rate'])} | "
                         f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']} | "
+                        f"{_pct(m['avoidance_rate_avoidable_missed'])} of {m['avoidable_missed_collisions']} | "
                         f"{m['unavoidable_collisions']} ({_pct(m['avoidance_rate_unavoidable'])} avoided) | "
                         f"{_num(m['impact_speed_shielded'])} m/s | {m['shield_only_collisions']} | "
                         f"{m['rear_ended_shielded']} |")

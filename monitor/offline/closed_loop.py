@@ -34,7 +34,10 @@ Avoidability (:func:`required_gap`): the hazard's *onset* is the first frame at 
 be seen (visible pixels in the image, within the monitor's range, and after its event: the
 lead's braking, the cut-in, the pedestrian's first step). A run is physically avoidable by
 the shield when the gap at onset exceeds what the ego needs to stop at the shield's
-deceleration after the reaction time, the hazard moving on as it does.
+deceleration after the reaction time, the hazard moving on as it does. From the onset to the
+end of the baseline's drive, the onset also counts the frames and those in which the
+baseline's detector reported the hazard (score >= ``min_score``): a collision with a hazard
+the detector saw is the planner's to avoid, one with a hazard it missed is the monitor's.
 """
 from __future__ import annotations
 
@@ -191,7 +194,9 @@ class Run:
         Frames in which the shield was engaged.
     onset : dict or None
         At the hazard's onset (computed on the baseline's drive): ``time``, ``gap``, ``speed``,
-        ``required`` (the gap the shield's deceleration needs) and ``avoidable``.
+        ``required`` (the gap the shield's deceleration needs) and ``avoidable``; ``frames``
+        from the onset to the end of the baseline's drive and ``seen_frames``, those in which
+        the baseline's detector reported the hazard (score >= the driver's ``min_score``).
     history : dict of lists
         Per frame: ``time``, ``speed``, ``gap`` (to the hazard, NaN without), ``risk`` (NaN for
         the baseline), ``engaged``, ``decel`` (applied, m/s^2).
@@ -264,7 +269,9 @@ class Perception:
         self.px_scale = camera.width / REFERENCE_WIDTH_PX
 
     def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]):
-        """(estimated depth, detections, hazard visible pixels, hazard camera distance).
+        """(estimated depth, detections, hazard visible pixels, hazard camera distance, hazard
+        row): the row of the hazard among the detections' ground truth (``dets.source``), -1
+        without a hazard.
 
         ``seeds`` seed the depth errors and the detector errors; a generator is made afresh
         from each, so the same seeds give the same errors every time.
@@ -280,7 +287,7 @@ class Perception:
         if hazard_row >= 0:
             visible = int(render.visible_px[hazard_row])
             distance = float(np.linalg.norm(boxes[hazard_row, :3] - self.camera.cam_to_ego[:3, 3]))
-        return depth, dets, visible, distance
+        return depth, dets, visible, distance, hazard_row
 
 
 class _Member:
@@ -335,7 +342,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     for step in range(n_steps):
         next_branches = []
         for world, group in branches:
-            depth, dets, visible, distance = perception.frame(world, condition, streams[step])
+            depth, dets, visible, distance, hazard_row = perception.frame(world, condition, streams[step])
             report = None
             if any(m.shield is not None for m in group):
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
@@ -343,6 +350,9 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and distance <= max_range:
                 onset = _onset(world, driver, shield_decel)
+            if onset is not None and group[0].shield is None:  # the baseline's drive, from the onset
+                onset["frames"] += 1
+                onset["seen_frames"] += bool(np.any((dets.source == hazard_row) & (dets.scores >= driver.min_score)))
             parts: dict[tuple, list] = {}
             for m in group:
                 seen = in_reach(dets.boxes3d, dets.scores, _acting_speed(world, m.queue, driver.dt), driver)
@@ -397,7 +407,7 @@ def _onset(world: World, driver: Driver, decel: float) -> dict:
     need = required_gap(world.ego.speed, decel, driver.reaction, max(speed_along, 0.0), hazard.decel)
     gap = world.hazard_gap()
     return {"time": world.time, "gap": gap, "speed": float(world.ego.speed), "required": need,
-            "avoidable": bool(gap > need)}
+            "avoidable": bool(gap > need), "frames": 0, "seen_frames": 0}
 
 
 def _advance(world: World, command: float, group: list[_Member], driver: Driver) -> bool:

@@ -6,8 +6,11 @@ baseline run of the same scenario:
 - hazard kinds: the baseline's and the shielded collision rates; the **avoidance rate**,
   baseline collisions the shield avoided / baseline collisions, over all of them and apart
   over the physically avoidable ones (:func:`~monitor.offline.closed_loop.required_gap` at
-  the hazard's onset) and the unavoidable ones; the mean impact speed of the collisions
-  left; collisions only the shielded car had; rear-end collisions;
+  the hazard's onset) and the unavoidable ones, and over the avoidable ones whose hazard
+  the baseline's detector *missed* (reported in fewer than ``SEEN_SHARE`` of the frames from
+  the onset to the collision: the monitor's case; a hazard the detector saw and the planner
+  still hit is the planner's); the mean impact speed of the collisions left; collisions
+  only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   the share of time spent braking and the **added trip time** (relative to the baseline's
   trip over the same route).
@@ -33,6 +36,10 @@ import numpy as np
 
 from monitor.offline.closed_loop import BASELINE, Run
 from monitor.offline.scenarios import HAZARD_KINDS
+
+#: Share of the frames from a hazard's onset in which the baseline's detector must report it
+#: for the hazard to count as seen (``Run.onset["seen_frames"] / Run.onset["frames"]``).
+SEEN_SHARE = 0.5
 
 
 def pair_runs(runs: list[Run], driver: str) -> list[tuple[Run, Run]]:
@@ -66,6 +73,7 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
     base_hits = [(b, s) for b, s in pairs if b.collided]
     avoidable = [(b, s) for b, s in base_hits if b.onset is not None and b.onset["avoidable"]]
     unavoidable = [(b, s) for b, s in base_hits if not (b.onset is not None and b.onset["avoidable"])]
+    missed = [(b, s) for b, s in avoidable if b.onset["seen_frames"] < SEEN_SHARE * b.onset["frames"]]
     avoided = lambda group: sum(not s.collided for _, s in group)  # noqa: E731
     return {
         "runs": n,
@@ -76,6 +84,8 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "avoidance_rate": _rate(avoided(base_hits), len(base_hits)),
         "avoidable_collisions": len(avoidable),
         "avoidance_rate_avoidable": _rate(avoided(avoidable), len(avoidable)),
+        "avoidable_missed_collisions": len(missed),
+        "avoidance_rate_avoidable_missed": _rate(avoided(missed), len(missed)),
         "unavoidable_collisions": len(unavoidable),
         "avoidance_rate_unavoidable": _rate(avoided(unavoidable), len(unavoidable)),
         "impact_speed_baseline": _mean(b.impact_speed for b, _ in base_hits),

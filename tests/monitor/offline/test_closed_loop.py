@@ -120,6 +120,8 @@ def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects
     travelled = h["gap"][decided] - base.final_gap
     assert travelled == pytest.approx(v * 0.2 + v * v / 12.0, abs=1e-9)
     assert base.final_gap > 0 and all(r.final_gap > 0 for r in shielded)
+    # the hazard, reported in every frame from its onset to the baseline's stop
+    assert base.onset["seen_frames"] == base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
 
 
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
@@ -131,6 +133,7 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     assert base.collided and base.braking_frames == 0
     assert base.impact_speed == pytest.approx(base.cruise)  # nothing braked it
     assert base.onset is not None and base.onset["avoidable"]
+    assert base.onset["seen_frames"] == 0 and base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
     assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
     # the obstacle stands where it stood, seen before it came within reach: confirmed by then
     # (here in the same frame), at most two frames later, and avoided
@@ -176,10 +179,10 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0):
+         engaged=0, impact=0.0, seen=0):
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged)
-    run.onset = {"avoidable": avoidable}
+    run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen}
     return run
 
 
@@ -188,8 +191,9 @@ def test_measures_by_hand():
     runs = [
         # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
         _run("rare-object", 0, BASELINE, "collision", impact=10.0), _run("rare-object", 0, shield),
-        _run("rare-object", 1, BASELINE, "collision", impact=8.0), _run("rare-object", 1, shield, "collision",
-                                                                         impact=4.0),
+        # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen
+        _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3),
+        _run("rare-object", 1, shield, "collision", impact=4.0),
         _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0),
         _run("rare-object", 2, shield),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
@@ -203,6 +207,7 @@ def test_measures_by_hand():
     assert (h["baseline_collisions"], h["shielded_collisions"]) == (3, 1)
     assert h["avoidance_rate"] == pytest.approx(2 / 3)
     assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)  # seeds 0 and 1, seed 0 avoided
+    assert (h["avoidable_missed_collisions"], h["avoidance_rate_avoidable_missed"]) == (1, 1.0)  # seed 0
     assert h["avoidance_rate_unavoidable"] == 1.0 and h["impact_speed_shielded"] == 4.0
     a = s["by_kind"]["hazard-free"]
     assert a["false_brake_rate"] == 0.5 and a["added_trip_time"] == pytest.approx(0.1)  # (20 % + 0) / 2
