@@ -498,3 +498,63 @@ def surface_shape(labels, index, ds, stride, road_slope, contact_ratio, contact_
         if counted > 0:
             out[j, 1] = touching / counted
     return out
+
+
+@kernel
+def occlusion(labels, index, ds, xs, ys, zs, plane, road_q, stride, min_height, edge_ratio,
+              edge_blocks):
+    """Per chosen component: the share of its columns in which it hides what is behind it.
+
+    ``labels``, ``index``, ``ds`` and ``stride`` as in :func:`surface_shape`; ``xs, ys,
+    zs`` float32 (rows, cols) the blocks' ego-frame points; ``plane`` float64 (3,) the road
+    ``z = a x + b y + c``; ``road_q`` float64 (3,) the road's inverse camera depth at pixel
+    ``(u, v)``, ``q0 + qu u + qv v`` as ``(q0, qu, qv)`` (1 / m). Returns float64 (k,), k =
+    ``index.max() + 1``: over the component's columns, the share whose top block has, among
+    the first ``edge_blocks`` valid blocks above it, one that stands ``min_height`` or more
+    above the road (something behind it, or above it) or one farther than ``edge_ratio``
+    times what the road would be there given the top block's depth (its depth times the
+    road's depth ratio between the two rows; above the horizon, its depth). A column
+    without a valid block above is not counted (the image's top edge, invalid pixels); NaN
+    when no column is counted.
+    """
+    rows, cols = ds.shape
+    k = 0
+    for m in range(index.shape[0]):
+        k = max(k, index[m] + 1)
+    top = np.full((k, cols), -1, dtype=np.int64)
+    for r in range(rows):
+        for col in range(cols):
+            m = labels[r, col]
+            if m >= 0 and index[m] >= 0 and top[index[m], col] < 0:
+                top[index[m], col] = r
+    a, b, c = plane[0], plane[1], plane[2]
+    q0, qu, qv = road_q[0], road_q[1], road_q[2]
+    out = np.full(k, np.nan)
+    for j in range(k):
+        counted = 0
+        hiding = 0
+        for col in range(cols):
+            r0 = top[j, col]
+            if r0 < 0:
+                continue
+            u = (col + 0.5) * stride
+            q_top = q0 + qu * u + qv * (r0 + 0.5) * stride
+            seen = 0
+            hides = False
+            r = r0 - 1
+            while r >= 0 and seen < edge_blocks:
+                d = ds[r, col]
+                if d > 0.0:
+                    seen += 1
+                    stands = zs[r, col] - (a * xs[r, col] + b * ys[r, col] + c) >= min_height
+                    q = q0 + qu * u + qv * (r + 0.5) * stride
+                    road_ratio = q_top / q if q > 0.0 and q_top > q else 1.0
+                    if stands or d > edge_ratio * road_ratio * ds[r0, col]:
+                        hides = True
+                r -= 1
+            if seen > 0:
+                counted += 1
+                hiding += hides
+        if counted > 0:
+            out[j] = hiding / counted
+    return out

@@ -55,6 +55,15 @@ in the manner of the stereo-vision obstacle detectors:
    than ``min_contact`` of its columns is dropped. Both tests are needed: the top of a low
    box (debris) lies along the road but stands on it, and the raised rear of a trailer has
    the road beneath it but is upright (off when ``max_incline`` is None).
+6. **What hides nothing is no object.** What stands on the road hides what is behind it:
+   right above its top the image sees the road far beyond it, the sky, or something
+   standing behind it. A patch of road that the depth reads a little too near over a wide
+   area (the smooth part of a network's error) rises above the plane without an edge: above
+   its top the road goes on at the depth the road would have there. An object that hides
+   something (a block farther than ``EDGE_RATIO`` times the road's depth there, or one
+   standing above the road, among the first ``EDGE_BLOCKS`` valid blocks above its top) in
+   fewer than ``min_occlusion`` of its columns is dropped (off when ``min_occlusion`` is
+   None).
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -90,10 +99,12 @@ from monitor.geometry.corridor import Corridor
 
 #: spacing of the corridor's centreline table along x, metres
 CORRIDOR_STEP_M = 0.1
-#: the road beneath an object touches it when no farther than this many times its depth ...
-CONTACT_RATIO = 1.2
-#: ... in the first this many valid blocks below it (a blurred edge between the two is one)
-CONTACT_BLOCKS = 3
+#: a depth edge: the road beneath an object touches it when no farther than this many
+#: times its depth, and what is seen above it is hidden behind it when farther than this
+#: many times the road's depth there ...
+EDGE_RATIO = 1.2
+#: ... in the first this many valid blocks below or above it (a blurred edge is one)
+EDGE_BLOCKS = 3
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -199,8 +210,12 @@ class GeometricParams:
     min_contact : float
         Share in [0, 1]: an object that lies along the road (``max_incline``) and stands on
         the road or on something in front of it in fewer than this share of its columns
-        (the road beneath it seen no farther than ``CONTACT_RATIO`` times its depth) floats
+        (the road beneath it seen no farther than ``EDGE_RATIO`` times its depth) floats
         above the road, and is not an object.
+    min_occlusion : float or None
+        Share in [0, 1]: an object that hides what is behind it (see the module's rule 6) in
+        fewer than this share of its columns is a patch of road read too near, not an
+        object; None: the rule is off.
     """
 
     stride: int = 4
@@ -228,6 +243,7 @@ class GeometricParams:
     structure_height: float | None = 4.2
     max_incline: float | None = 0.5
     min_contact: float = 0.35
+    min_occlusion: float | None = 0.25
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
@@ -270,6 +286,10 @@ class GeometricParams:
             value = getattr(self, name)
             if not 0 <= value <= 1:
                 raise ValueError(f"{name} = {value!r}, must be a share in [0, 1]")
+        occlusion = self.min_occlusion
+        if occlusion is not None and not (isinstance(occlusion, (int, float)) and not isinstance(occlusion, bool)
+                                          and 0 <= occlusion <= 1):
+            raise ValueError(f"min_occlusion = {occlusion!r}, must be a share in [0, 1], or None (off)")
 
 
 @dataclass(frozen=True)
@@ -475,8 +495,8 @@ class GeometricRetriever:
         boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
         keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
             & (boxes[:, 3] >= params.min_size)
-        if params.max_incline is not None and keep.any():
-            keep[keep] = ~self._floating(scratch.labels, keep, ds, ground)
+        if keep.any():
+            keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground)
         order = np.argsort(boxes[keep, 4], kind="stable")
         return GeometricView(
             boxes=boxes[keep][order],
@@ -490,26 +510,36 @@ class GeometricRetriever:
             below_ground_fraction=below,
         )
 
-    def _floating(self, labels, keep, ds, ground) -> np.ndarray:
-        """Which of the kept components (``keep``, bool (n,)) float above the road: lie along
-        it (``max_incline``) with the road seen beneath them (``min_contact``). bool (kept,).
+    def _no_object(self, labels, keep, points, ground) -> np.ndarray:
+        """Which of the kept components (``keep``, bool (n,)) are no objects: those that
+        float (rule 5: ``max_incline``, ``min_contact``) or hide nothing (rule 6:
+        ``min_occlusion``). bool (kept,).
 
         The road plane ``z = a x + b y + c`` seen through the pixel ``(u, v)`` has the inverse
         camera depth ``(r_z - a r_x - b r_y) / (a o_x + b o_y + c - o_z)``, with ``r = M (u,
         v, 1)`` the pixel's ray per metre of camera depth and ``o`` the camera centre: affine
-        in the pixel, as v-disparity has it, with the slope down the image below.
+        in the pixel, as v-disparity has it, ``q0 + qu u + qv v`` with ``qv`` the slope down
+        the image.
         """
+        p = self.params
         a, b, c = ground
         M, o = self._M, self._origin
-        road_slope = (M[2, 1] - a * M[0, 1] - b * M[1, 1]) / (a * o[0] + b * o[1] + c - o[2])
-        floating = np.zeros(int(keep.sum()), dtype=bool)
-        if not road_slope > 0:  # the image's rows do not run down the road: no rule to apply
-            return floating
+        qu, qv, q0 = (M[2] - a * M[0] - b * M[1]) / (a * o[0] + b * o[1] + c - o[2])
+        out = np.zeros(int(keep.sum()), dtype=bool)
+        if not qv > 0:  # the image's rows do not run down the road: no rule to apply
+            return out
         index = np.full(keep.size, -1, dtype=np.int64)
-        index[keep] = np.arange(floating.size)
-        shape = kernels.surface_shape(labels, index, ds, self.params.stride, road_slope,
-                                      CONTACT_RATIO, CONTACT_BLOCKS)
-        return (shape[:, 0] > self.params.max_incline) & (shape[:, 1] < self.params.min_contact)
+        index[keep] = np.arange(out.size)
+        xs, ys, zs, ds = points
+        if p.max_incline is not None:
+            shape = kernels.surface_shape(labels, index, ds, p.stride, qv, EDGE_RATIO, EDGE_BLOCKS)
+            out |= (shape[:, 0] > p.max_incline) & (shape[:, 1] < p.min_contact)
+        if p.min_occlusion is not None:
+            hides = kernels.occlusion(labels, index, ds, xs, ys, zs, np.array(ground, dtype=np.float64),
+                                      np.array([q0, qu, qv]), p.stride, p.min_height, EDGE_RATIO,
+                                      EDGE_BLOCKS)
+            out |= hides < p.min_occlusion
+        return out
 
     def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
         """The road plane ``(a, b, c)`` and its support (share of all blocks), or the

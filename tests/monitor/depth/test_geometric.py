@@ -170,6 +170,73 @@ def test_a_patch_of_road_read_too_near_floats_and_is_no_object_what_stands_stays
         assert _match(ruled, _truth(labels, depth, k))[1] > 0.3  # debris: its top 0.1 m only
 
 
+def test_a_wide_patch_of_road_read_a_little_too_near_hides_nothing_and_is_no_object():
+    road, _ = _render([])
+    rows, cols = np.mgrid[0:road.shape[0], 0:road.shape[1]].astype(np.float32)
+    # the smooth part of a network's error: the road read up to 25 % too near over a patch
+    # some 300 x 150 px, without an edge (the road's height error is 0.25 x 1.5 m at its
+    # centre, 0.2 m where the factor is 0.87)
+    bump = np.exp(-0.5 * (((cols - 800) / 120) ** 2 + ((rows - 700) / 50) ** 2))
+    patch = road * (1 - np.float32(0.25) * bump)
+    # without the rule it is an object, and the floating test keeps it (it touches the road
+    # beneath it: no edge below either) ...
+    assert GeometricRetriever(CAMERA, GeometricParams(min_occlusion=None))(patch).shape == (1, 5)
+    # ... with it none: above its top the road goes on at the road's depth
+    assert GeometricRetriever(CAMERA)(patch).shape == (0, 5)
+
+
+def test_what_stands_hides_what_is_behind_it_and_is_kept():
+    # the objects of the floating test, a wall behind a car (above its roof the image sees
+    # the wall, a few metres behind), and a child 1 m in front of a car (above the child's
+    # head the image sees the car's rear: no depth edge, 9.15 / 7.85 = 1.17 < 1.2, but it
+    # stands above the road)
+    car_at_wall = [16.0, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]
+    wall_behind = [21.0, 0.0, 2.0, 12.0, 0.4, 4.0, 0.0]
+    child = [8.0, 0.2, 0.5, 0.4, 0.3, 1.0, 0.0]
+    car_behind_child = [11.45, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 9.15
+    off = GeometricParams(min_occlusion=None)
+    for boxes in ([CAR_AHEAD, PEDESTRIAN, DEBRIS, RAISED_REAR], [car_at_wall, wall_behind],
+                  [child, car_behind_child]):
+        depth, labels = _render(boxes)
+        ruled, plain = GeometricRetriever(CAMERA)(depth), GeometricRetriever(CAMERA, off)(depth)
+        np.testing.assert_array_equal(ruled, plain)
+        assert _match(ruled, _truth(labels, depth, 0))[1] > 0.3
+
+
+def test_occlusion_by_hand():
+    rows, cols, stride = 8, 5, 4
+    q0, qu, qv = -0.05, 0.0, 0.01   # the road's inverse depth 0.01 / m more per pixel down
+    v = (np.arange(rows) + 0.5) * stride
+    road = (1.0 / (q0 + qv * v)).astype(np.float32)  # q per row: -0.03, 0.01, 0.05, ... 0.21
+    labels = np.full((rows, cols), -1, np.int32)
+    labels[5:7, :] = 0                         # one component, rows 5-6, in every column
+    ds = np.tile(road[:, None], (1, cols))
+    ds[0] = 80.0                               # the sky, above the horizon
+    xs = np.ones((rows, cols), np.float32)
+    ys = np.zeros((rows, cols), np.float32)
+    zs = np.zeros((rows, cols), np.float32)    # on the plane z = 0 unless said
+    ds[5:7, :] = 6.0                           # the road at row 5 is 1 / 0.17 = 5.9 m away
+    # column 0: above it the road at the road's depths (7.7, 11.1, 20 m): hides nothing
+    # column 1: what is above is farther than the road would be, but by less than 1.2 x:
+    # the road's depth ratios from row 5 to rows 4 and 2 are 0.17 / 0.13 and 0.17 / 0.05
+    ds[4, 1], ds[3, 1], ds[2, 1] = 6.0 * 0.17 / 0.13 * 1.15, 0.0, 6.0 * 0.17 / 0.05 * 1.1
+    # column 2: the third valid block above is 1.3 x farther than the road there: hides
+    ds[4, 2], ds[3, 2], ds[2, 2] = 6.0, 6.0, 6.0 * 0.17 / 0.05 * 1.3
+    # column 3: the block right above stands 0.3 m above the road (something behind): hides
+    ds[4, 3], zs[4, 3] = 6.5, 0.3
+    # column 4: no valid block above: not counted
+    ds[:5, 4] = 0.0
+    out = kernels.occlusion(labels, np.array([0], np.int64), ds, xs, ys, zs,
+                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.2, 3)
+    assert out == pytest.approx([2 / 4])
+    # a component whose top is in row 0 (the image's edge): no column counted
+    edge = np.full((rows, cols), -1, np.int32)
+    edge[0:2, 1:3] = 0
+    out = kernels.occlusion(edge, np.array([0, -1], np.int64), ds, xs, ys, zs,
+                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.2, 3)
+    assert out.shape == (1,) and np.isnan(out[0])
+
+
 def test_surface_shape_by_hand():
     rows, cols, stride, road = 12, 3, 4, 0.01
     v = (np.arange(rows) + 0.5) * stride   # the block rows' pixel rows
@@ -582,6 +649,8 @@ def test_surface_shape_equals_numpy():
     ("max_incline", 0.0, r"max_incline = 0.0, must be a finite share .* > 0, or None"),
     ("max_incline", True, "max_incline = True"),
     ("min_contact", 1.5, r"min_contact = 1.5, must be a share in \[0, 1\]"),
+    ("min_occlusion", -0.1, r"min_occlusion = -0.1, must be a share in \[0, 1\], or None"),
+    ("min_occlusion", True, "min_occlusion = True"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
