@@ -60,7 +60,7 @@ in the manner of the stereo-vision obstacle detectors:
    standing behind it. A patch of road that the depth reads a little too near over a wide
    area (the smooth part of a network's error) rises above the plane without an edge: above
    its top the road goes on at the depth the road would have there. An object that hides
-   something (a block farther than ``EDGE_RATIO`` times the road's depth there, or one
+   something (a block farther than ``OCCLUSION_RATIO`` times the road's depth there, or one
    standing above the road, among the first ``EDGE_BLOCKS`` valid blocks above its top) in
    fewer than ``min_occlusion`` of its columns is dropped (off when ``min_occlusion`` is
    None).
@@ -99,11 +99,15 @@ from monitor.geometry.corridor import Corridor
 
 #: spacing of the corridor's centreline table along x, metres
 CORRIDOR_STEP_M = 0.1
-#: a depth edge: the road beneath an object touches it when no farther than this many
-#: times its depth, and what is seen above it is hidden behind it when farther than this
-#: many times the road's depth there ...
-EDGE_RATIO = 1.2
-#: ... in the first this many valid blocks below or above it (a blurred edge is one)
+#: the road beneath an object touches it when no farther than this many times its depth
+CONTACT_RATIO = 1.2
+#: what is seen above an object is hidden behind it when farther than this many times the
+#: road's depth there: the road behind an object h metres tall, seen from a camera H metres
+#: up, lies H / (H - h) times farther than its top (debris 0.3 m tall seen from 1.5 m: 1.25),
+#: a patch of road read too near goes on at about the road's depth (1.0)
+OCCLUSION_RATIO = 1.1
+#: the first this many valid blocks below or above an object are looked at (a blurred
+#: edge is one)
 EDGE_BLOCKS = 3
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
@@ -210,7 +214,7 @@ class GeometricParams:
     min_contact : float
         Share in [0, 1]: an object that lies along the road (``max_incline``) and stands on
         the road or on something in front of it in fewer than this share of its columns
-        (the road beneath it seen no farther than ``EDGE_RATIO`` times its depth) floats
+        (the road beneath it seen no farther than ``CONTACT_RATIO`` times its depth) floats
         above the road, and is not an object.
     min_occlusion : float or None
         Share in [0, 1]: an object that hides what is behind it (see the module's rule 6) in
@@ -532,11 +536,11 @@ class GeometricRetriever:
         index[keep] = np.arange(out.size)
         xs, ys, zs, ds = points
         if p.max_incline is not None:
-            shape = kernels.surface_shape(labels, index, ds, p.stride, qv, EDGE_RATIO, EDGE_BLOCKS)
+            shape = kernels.surface_shape(labels, index, ds, p.stride, qv, CONTACT_RATIO, EDGE_BLOCKS)
             out |= (shape[:, 0] > p.max_incline) & (shape[:, 1] < p.min_contact)
         if p.min_occlusion is not None:
             hides = kernels.occlusion(labels, index, ds, xs, ys, zs, np.array(ground, dtype=np.float64),
-                                      np.array([q0, qu, qv]), p.stride, p.min_height, EDGE_RATIO,
+                                      np.array([q0, qu, qv]), p.stride, p.min_height, OCCLUSION_RATIO,
                                       EDGE_BLOCKS)
             out |= hides < p.min_occlusion
         return out

@@ -187,13 +187,13 @@ def test_a_wide_patch_of_road_read_a_little_too_near_hides_nothing_and_is_no_obj
 
 def test_what_stands_hides_what_is_behind_it_and_is_kept():
     # the objects of the floating test, a wall behind a car (above its roof the image sees
-    # the wall, a few metres behind), and a child 1 m in front of a car (above the child's
-    # head the image sees the car's rear: no depth edge, 9.15 / 7.85 = 1.17 < 1.2, but it
-    # stands above the road)
+    # the wall, a few metres behind), and a child 0.7 m in front of a car (above the child's
+    # head the image sees the car's rear, no depth edge at 14.2 / 13.5 = 1.05 times the
+    # child's camera depth, but it stands above the road)
     car_at_wall = [16.0, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]
     wall_behind = [21.0, 0.0, 2.0, 12.0, 0.4, 4.0, 0.0]
-    child = [8.0, 0.2, 0.5, 0.4, 0.3, 1.0, 0.0]
-    car_behind_child = [11.45, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 9.15
+    child = [15.0, 0.2, 0.5, 0.4, 0.3, 1.0, 0.0]
+    car_behind_child = [18.15, 0.2, 0.865, 1.95, 4.6, 1.73, 0.0]  # rear face at x = 15.85
     off = GeometricParams(min_occlusion=None)
     for boxes in ([CAR_AHEAD, PEDESTRIAN, DEBRIS, RAISED_REAR], [car_at_wall, wall_behind],
                   [child, car_behind_child]):
@@ -217,23 +217,23 @@ def test_occlusion_by_hand():
     zs = np.zeros((rows, cols), np.float32)    # on the plane z = 0 unless said
     ds[5:7, :] = 6.0                           # the road at row 5 is 1 / 0.17 = 5.9 m away
     # column 0: above it the road at the road's depths (7.7, 11.1, 20 m): hides nothing
-    # column 1: what is above is farther than the road would be, but by less than 1.2 x:
+    # column 1: what is above is farther than the road would be, but by less than 1.1 x:
     # the road's depth ratios from row 5 to rows 4 and 2 are 0.17 / 0.13 and 0.17 / 0.05
-    ds[4, 1], ds[3, 1], ds[2, 1] = 6.0 * 0.17 / 0.13 * 1.15, 0.0, 6.0 * 0.17 / 0.05 * 1.1
-    # column 2: the third valid block above is 1.3 x farther than the road there: hides
-    ds[4, 2], ds[3, 2], ds[2, 2] = 6.0, 6.0, 6.0 * 0.17 / 0.05 * 1.3
+    ds[4, 1], ds[3, 1], ds[2, 1] = 6.0 * 0.17 / 0.13 * 1.05, 0.0, 6.0 * 0.17 / 0.05 * 1.08
+    # column 2: the third valid block above is 1.15 x farther than the road there: hides
+    ds[4, 2], ds[3, 2], ds[2, 2] = 6.0, 6.0, 6.0 * 0.17 / 0.05 * 1.15
     # column 3: the block right above stands 0.3 m above the road (something behind): hides
     ds[4, 3], zs[4, 3] = 6.5, 0.3
     # column 4: no valid block above: not counted
     ds[:5, 4] = 0.0
     out = kernels.occlusion(labels, np.array([0], np.int64), ds, xs, ys, zs,
-                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.2, 3)
+                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.1, 3)
     assert out == pytest.approx([2 / 4])
     # a component whose top is in row 0 (the image's edge): no column counted
     edge = np.full((rows, cols), -1, np.int32)
     edge[0:2, 1:3] = 0
     out = kernels.occlusion(edge, np.array([0, -1], np.int64), ds, xs, ys, zs,
-                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.2, 3)
+                            np.zeros(3), np.array([q0, qu, qv]), stride, 0.2, 1.1, 3)
     assert out.shape == (1,) and np.isnan(out[0])
 
 
