@@ -8,7 +8,9 @@ Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
    :func:`~monitor.synthetic.degrade.detect` degrade it and the detections under the
    scenario's condition;
 2. the **baseline** driver brakes at ``brake`` m/s^2 when a detection (score >= ``min_score``)
-   lies in its corridor within its stopping distance plus a margin (from the speed its brake
+   lies in its corridor, or will by the time the ego gets there (its track's lateral speed,
+   :class:`~monitor.offline.tracking.Tracker`, over at most ``predict_s`` seconds), within
+   its stopping distance plus a margin (from the speed its brake
    would act at, the commands already on their way acting first, and with the frames it
    takes to confirm counted as reaction) in ``confirm_frames``
    consecutive frames (it sees only what its detector sees; one frame is not enough, as a
@@ -53,6 +55,7 @@ from monitor.geometry.camera import Camera
 from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.geometry.boxes3d import footprints
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
+from monitor.offline.tracking import Tracker
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.synthetic import Condition, get_condition, render_depth
@@ -86,6 +89,10 @@ class Driver:
         Consecutive frames without one before it stops braking.
     min_score : float
         Detections scoring below it are ignored.
+    predict_s : float
+        Seconds ahead over which a detection's tracked lateral motion counts: one that will be
+        in the corridor by the time the ego reaches it (at most this many seconds) counts now;
+        0: only what is in the corridor now.
     """
 
     dt: float = 0.1
@@ -97,13 +104,14 @@ class Driver:
     confirm_frames: int = 2
     release_frames: int = 5
     min_score: float = 0.3
+    predict_s: float = 2.0
 
     def __post_init__(self):
         for name in ("dt", "brake", "comfort", "corridor"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{name} = {value!r}, must be a finite number > 0")
-        for name in ("reaction", "margin"):
+        for name in ("reaction", "margin", "predict_s"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} = {value!r}, must be a finite number >= 0")
@@ -149,13 +157,23 @@ def required_gap(speed: float, decel: float, reaction: float, hazard_speed: floa
     return float(max(np.max(ego - other), 0.0))
 
 
-def in_reach(detections: np.ndarray, scores: np.ndarray, speed: float, driver: Driver) -> bool:
-    """Is a detection (score >= ``min_score``) in the corridor within the stopping distance
-    at ``speed`` plus the margin, the frames it takes to confirm a track counted as reaction?
-    Boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin)."""
-    feet = footprints(detections[scores >= driver.min_score])
+def in_reach(detections: np.ndarray, speed: float, driver: Driver, lateral_speed: np.ndarray | None = None) -> bool:
+    """Is a detection in the corridor within the stopping distance at ``speed`` plus the
+    margin, the frames it takes to confirm a track counted as reaction?
+
+    ``detections``: boxes ``x, y, z, w, l, h, yaw`` in the ego frame (rear axle origin),
+    shape (k, 7), those the driver trusts. ``lateral_speed`` (k,), m/s along y
+    (:meth:`Tracker.update`): each footprint swept across the path for the time the ego takes
+    to reach it at ``speed``, at most ``driver.predict_s``; None: each where it stands.
+    """
+    feet = footprints(detections)
     ahead = feet[:, 0] - EGO_FRONT_M
-    in_path = (feet[:, 2] > -driver.corridor) & (feet[:, 1] < driver.corridor)
+    low, high = feet[:, 1], feet[:, 2]
+    if lateral_speed is not None:
+        horizon = np.minimum(np.maximum(ahead, 0.0) / speed, driver.predict_s) if speed > 0 else driver.predict_s
+        shift = lateral_speed * horizon
+        low, high = low + np.minimum(shift, 0.0), high + np.maximum(shift, 0.0)
+    in_path = (high > -driver.corridor) & (low < driver.corridor)
     # a detection confirmed confirm_frames - 1 frames from now: those frames' travel counts too
     limit = reach(speed, driver.brake, driver.reaction + (driver.confirm_frames - 1) * driver.dt, driver.margin)
     return bool(np.any(in_path & (ahead > -1.0) & (ahead < limit)))
@@ -293,11 +311,12 @@ class Perception:
 class _Member:
     """One driver's state inside a branch."""
 
-    def __init__(self, run: Run, shield: Shield | None, delay: int):
+    def __init__(self, run: Run, shield: Shield | None, driver: Driver, sensor: np.ndarray):
         self.run, self.shield = run, shield
+        self.tracker = Tracker(sensor) if driver.predict_s > 0 else None
         self.confirmed = self.missed = 0
         self.braking = False
-        self.queue = deque([0.0] * delay)  # commands on their way to the brakes
+        self.queue = deque([0.0] * driver.delay_steps)  # commands on their way to the brakes
 
 
 def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonitor | None,
@@ -332,7 +351,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
     configs = [None] + shields
     members = [_Member(Run(spec.kind, spec.condition, int(spec.seed), driver_label(c), world.regime,
-                           world.speed), Shield(c) if c is not None else None, driver.delay_steps)
+                           world.speed), Shield(c) if c is not None else None, driver,
+                       perception.camera.cam_to_ego[:2, 3])
                for c in configs]
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
     # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
@@ -353,9 +373,12 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             if onset is not None and group[0].shield is None:  # the baseline's drive, from the onset
                 onset["frames"] += 1
                 onset["seen_frames"] += bool(np.any((dets.source == hazard_row) & (dets.scores >= driver.min_score)))
+            trusted = dets.boxes3d[dets.scores >= driver.min_score]
             parts: dict[tuple, list] = {}
             for m in group:
-                seen = in_reach(dets.boxes3d, dets.scores, _acting_speed(world, m.queue, driver.dt), driver)
+                lateral = None if m.tracker is None else m.tracker.update(trusted[:, :2], world.time,
+                                                                          world.ego.position[0])
+                seen = in_reach(trusted, _acting_speed(world, m.queue, driver.dt), driver, lateral)
                 m.confirmed, m.missed = (m.confirmed + 1, 0) if seen else (0, m.missed + 1)
                 if m.confirmed >= driver.confirm_frames:
                     m.braking = True

@@ -124,6 +124,27 @@ def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects
     assert base.onset["seen_frames"] == base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
 
 
+def test_a_walker_always_detected_the_planner_that_predicts_stops_for(perception):
+    # a pedestrian stepping out, detected where it is in every frame it is visible: wherever
+    # the baseline's own brake can stop short from the onset (the frames it takes to confirm
+    # counted as reaction), the planner that sweeps each track across the path stops short;
+    # braking only for what is in the corridor now comes too late where the walker enters it
+    # less than a stopping distance ahead
+    driver = Driver()
+    avoidable = late = 0
+    for seed in range(6):
+        spec = ScenarioSpec("pedestrian", "nominal", seed)
+        (now,) = run_scenario(spec, perception, None, driver=Driver(predict_s=0.0), condition=SHARP)
+        (ahead,) = run_scenario(spec, perception, None, driver=driver, condition=SHARP)
+        onset = ahead.onset
+        need = required_gap(onset["speed"], driver.brake, driver.reaction + (driver.confirm_frames - 1) * driver.dt)
+        if onset["gap"] > need:
+            avoidable += 1
+            assert not ahead.collided and ahead.outcome in ("stopped", "passed"), seed
+            late += now.collided
+    assert avoidable >= 4 and late >= 2
+
+
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     seed = _rare_seed("parking")
     spec = ScenarioSpec("rare-object", "nominal", seed)
