@@ -33,60 +33,98 @@ def block_points(depth, stride, edge_spread, M, origin, xs, ys, zs, ds, invalid_
     the ego-frame point (metres) and ``ds`` the camera depth; a block without a valid pixel
     gets 0 in all four. ``invalid_px`` int32 (rows, cols): the block's invalid pixels.
     Returns the number of invalid pixels.
+
+    Each band of ``stride`` rows is summed down its columns (sum, count, smallest and largest
+    valid depth per pixel column), then across each block's columns, then back-projected.
+    Bands and blocks four pixels wide, the default stride's, take loops written out for four
+    (LLVM vectorises them); they add in the same order as the general loops, so the bits do
+    not depend on which loop ran.
     """
     height, width = depth.shape
     rows, cols = ds.shape
     zero = np.float32(0.0)
-    sums = np.empty(width, dtype=np.float32)
-    counts = np.empty(width, dtype=np.int32)
+    sums = np.empty(width, dtype=np.float32)  # per pixel column of the band
+    counts = np.empty(width, dtype=np.float32)  # whole numbers, exact in float32
     lows = np.empty(width, dtype=np.float32)
     highs = np.empty(width, dtype=np.float32)
+    totals = np.empty(cols, dtype=np.float32)  # per block of the band
+    numbers = np.empty(cols, dtype=np.float32)
+    least = np.empty(cols, dtype=np.float32)
+    most = np.empty(cols, dtype=np.float32)
+    widths = np.empty(cols, dtype=np.int64)
+    centres = np.empty(cols)
+    for c in range(cols):
+        j0 = c * stride
+        j1 = min(j0 + stride, width)
+        widths[c] = j1 - j0
+        centres[c] = 0.5 * (j0 + j1)
+    whole = width // 4 if stride == 4 else 0  # blocks of four columns
     spread = np.float32(1.0 + edge_spread)
+    ox, oy, oz = origin[0], origin[1], origin[2]
     n_invalid = 0
     for r in range(rows):
         i0 = r * stride
         i1 = min(i0 + stride, height)
-        sums[:] = zero
-        counts[:] = 0
-        lows[:] = _INF
-        highs[:] = zero
-        for i in range(i0, i1):
-            row = depth[i]
+        if i1 - i0 == 4:
+            row0, row1, row2, row3 = depth[i0], depth[i0 + 1], depth[i0 + 2], depth[i0 + 3]
             for j in range(width):
-                d = row[j]
-                valid = (d > zero) & (d < _INF)
-                sums[j] += d if valid else zero
-                counts[j] += np.int32(valid)
-                lows[j] = min(lows[j], d if valid else _INF)
-                highs[j] = max(highs[j], d if valid else zero)
-        v = 0.5 * (i0 + i1)
-        for c in range(cols):
-            j0 = c * stride
-            j1 = min(j0 + stride, width)
-            total = zero
-            n = 0
-            low = _INF
-            high = zero
-            for j in range(j0, j1):
+                d0, d1, d2, d3 = row0[j], row1[j], row2[j], row3[j]
+                ok0, ok1 = (d0 > zero) & (d0 < _INF), (d1 > zero) & (d1 < _INF)
+                ok2, ok3 = (d2 > zero) & (d2 < _INF), (d3 > zero) & (d3 < _INF)
+                sums[j] = (((d0 if ok0 else zero) + (d1 if ok1 else zero)) + (d2 if ok2 else zero)) \
+                    + (d3 if ok3 else zero)
+                counts[j] = ((np.float32(ok0) + np.float32(ok1)) + np.float32(ok2)) + np.float32(ok3)
+                lows[j] = min(min(min(d0 if ok0 else _INF, d1 if ok1 else _INF), d2 if ok2 else _INF),
+                              d3 if ok3 else _INF)
+                highs[j] = max(max(max(d0 if ok0 else zero, d1 if ok1 else zero), d2 if ok2 else zero),
+                               d3 if ok3 else zero)
+        else:
+            sums[:] = zero
+            counts[:] = zero
+            lows[:] = _INF
+            highs[:] = zero
+            for i in range(i0, i1):
+                row = depth[i]
+                for j in range(width):
+                    d = row[j]
+                    valid = (d > zero) & (d < _INF)
+                    sums[j] += d if valid else zero
+                    counts[j] += np.float32(valid)
+                    lows[j] = min(lows[j], d if valid else _INF)
+                    highs[j] = max(highs[j], d if valid else zero)
+        for c in range(whole):
+            j = 4 * c
+            totals[c] = ((sums[j] + sums[j + 1]) + sums[j + 2]) + sums[j + 3]
+            numbers[c] = ((counts[j] + counts[j + 1]) + counts[j + 2]) + counts[j + 3]
+            least[c] = min(min(min(lows[j], lows[j + 1]), lows[j + 2]), lows[j + 3])
+            most[c] = max(max(max(highs[j], highs[j + 1]), highs[j + 2]), highs[j + 3])
+        for c in range(whole, cols):
+            total, n, low, high = zero, zero, _INF, zero
+            for j in range(c * stride, c * stride + widths[c]):
                 total += sums[j]
                 n += counts[j]
                 low = min(low, lows[j])
                 high = max(high, highs[j])
-            missing = (i1 - i0) * (j1 - j0) - n
-            invalid_px[r, c] = missing
-            n_invalid += missing
-            if n == 0:
-                xs[r, c] = zero
-                ys[r, c] = zero
-                zs[r, c] = zero
-                ds[r, c] = zero
-                continue
-            d = total / np.float32(n) if high <= spread * low else low
-            u = 0.5 * (j0 + j1)
-            xs[r, c] = origin[0] + d * (M[0, 0] * u + M[0, 1] * v + M[0, 2])
-            ys[r, c] = origin[1] + d * (M[1, 0] * u + M[1, 1] * v + M[1, 2])
-            zs[r, c] = origin[2] + d * (M[2, 0] * u + M[2, 1] * v + M[2, 2])
-            ds[r, c] = d
+            totals[c], numbers[c], least[c], most[c] = total, n, low, high
+        v = 0.5 * (i0 + i1)
+        rx, ry, rz = M[0, 1] * v, M[1, 1] * v, M[2, 1] * v
+        mx, my, mz = M[0, 0], M[1, 0], M[2, 0]
+        kx, ky, kz = M[0, 2], M[1, 2], M[2, 2]
+        xr, yr, zr, dr, missing = xs[r], ys[r], zs[r], ds[r], invalid_px[r]
+        band_invalid = 0
+        for c in range(cols):
+            n = numbers[c]
+            gone = (i1 - i0) * widths[c] - int(n)
+            missing[c] = gone
+            band_invalid += gone
+            some = n > zero
+            d = totals[c] / n if most[c] <= spread * least[c] else least[c]
+            u = centres[c]
+            xr[c] = ox + d * (mx * u + rx + kx) if some else zero
+            yr[c] = oy + d * (my * u + ry + ky) if some else zero
+            zr[c] = oz + d * (mz * u + rz + kz) if some else zero
+            dr[c] = d if some else zero
+        n_invalid += band_invalid
     return n_invalid
 
 
