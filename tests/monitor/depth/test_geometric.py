@@ -406,16 +406,19 @@ def _block_points_numpy(depth, stride, edge_spread, camera):
     return out, invalid
 
 
-@pytest.mark.parametrize("stride, edge_spread", [(1, 0.15), (3, 0.15), (4, 0.15), (4, 100.0)])
-def test_block_points_equals_numpy(stride, edge_spread):
+@pytest.mark.parametrize("stride, edge_spread, width", [(1, 0.15, 160), (3, 0.15, 160), (4, 0.15, 160),
+                                                        (4, 100.0, 160), (4, 0.15, 158), (8, 0.15, 158)])
+def test_block_points_equals_numpy(stride, edge_spread, width):
+    # 90 rows: a last band of 2 rows at stride 4 (of 4 at stride 8: the loop written for four
+    # rows); 158 columns: a last block of 2 columns (of 6 at stride 8)
     camera = _small_camera()
     rng = np.random.default_rng(stride)
-    depth = rng.uniform(10.0, 12.0, (90, 160)).astype(np.float32)
-    depth[:, 80:] = rng.uniform(3.0, 40.0, (90, 80))  # smooth on the left, edges on the right
+    depth = rng.uniform(10.0, 12.0, (90, width)).astype(np.float32)
+    depth[:, 80:] = rng.uniform(3.0, 40.0, (90, width - 80))  # smooth on the left, edges on the right
     depth[rng.random(depth.shape) < 0.2] = np.nan
     depth[rng.random(depth.shape) < 0.05] = -2.0
     depth[:9, :9] = np.inf  # a block (or more) with no valid pixel
-    rows, cols = -(-90 // stride), -(-160 // stride)
+    rows, cols = -(-90 // stride), -(-width // stride)
     points = np.empty((4, rows, cols), dtype=np.float32)
     invalid = np.empty((rows, cols), dtype=np.int32)
     M = np.ascontiguousarray(camera.cam_to_ego[:3, :3] @ np.linalg.inv(camera.K))
@@ -425,6 +428,34 @@ def test_block_points_equals_numpy(stride, edge_spread):
     np.testing.assert_array_equal(invalid, expected_invalid)
     assert n == expected_invalid.sum() == np.count_nonzero(~(np.isfinite(depth) & (depth > 0)))
     np.testing.assert_allclose(points, expected, rtol=1e-5, atol=1e-4)
+
+
+def test_block_points_loops_written_for_four_give_the_plain_loops_bits():
+    # the kernel's band and block loops written out for a stride of 4 against a plain float32
+    # loop in Python that adds each block's pixels row by row, as the kernel's general loops do
+    rng = np.random.default_rng(4)
+    depth = rng.uniform(3.0, 40.0, (40, 46)).astype(np.float32)  # a last block of 2 columns
+    depth[rng.random(depth.shape) < 0.2] = np.nan
+    M = np.ascontiguousarray(CAMERA.cam_to_ego[:3, :3] @ np.linalg.inv(CAMERA.K))
+    origin = np.ascontiguousarray(CAMERA.cam_to_ego[:3, 3])
+    points = np.empty((4, 10, 12), dtype=np.float32)
+    kernels.block_points(depth, 4, 0.15, M, origin, *points, np.empty((10, 12), dtype=np.int32))
+    for r in range(10):
+        for c in range(12):
+            pixels = depth[4 * r:4 * r + 4, 4 * c:4 * c + 4]
+            column_sums = [np.float32(0.0)] * pixels.shape[1]
+            for row in pixels:  # down the band, then across the block
+                column_sums = [s + (d if d > 0 else np.float32(0.0)) for s, d in zip(column_sums, row)]
+            total = np.float32(0.0)
+            for s in column_sums:
+                total = np.float32(total + s)
+            valid = pixels[pixels > 0]
+            edge = valid.max() > np.float32(1.15) * valid.min()
+            d = valid.min() if edge else np.float32(total / np.float32(valid.size))
+            u, v = 4 * c + 0.5 * pixels.shape[1], 4 * r + 2.0
+            ray = [M[k, 0] * u + M[k, 1] * v + M[k, 2] for k in range(3)]
+            expected = [np.float32(origin[k] + d * ray[k]) for k in range(3)] + [d]
+            assert list(points[:, r, c]) == expected, (r, c)
 
 
 def _cloud(seed, n=3000):
