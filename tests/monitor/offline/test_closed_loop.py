@@ -13,7 +13,7 @@ from monitor.depth.prior import build_prior  # noqa: E402
 from monitor.geometry.camera import Camera  # noqa: E402
 from monitor.offline import safety_measures as sm  # noqa: E402
 from monitor.offline.closed_loop import (  # noqa: E402
-    BASELINE, Driver, Perception, Run, required_gap, run_scenario, stopping_distance,
+    BASELINE, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
 )
 from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
 from monitor.risk_monitor import RiskMonitor  # noqa: E402
@@ -122,6 +122,23 @@ def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects
     assert base.final_gap > 0 and all(r.final_gap > 0 for r in shielded)
     # the hazard, reported in every frame from its onset to the baseline's stop
     assert base.onset["seen_frames"] == base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
+
+
+@pytest.mark.parametrize("lateral, predict_s, reached", [
+    (None, 2.0, False),   # 2.7-3.3 m to the left, the corridor 1.25 m either side
+    (-1.5, 2.0, True),    # 1 s to reach it (5 m at 5 m/s): its near side sweeps to 1.2 m
+    (-1.4, 2.0, False),   # ... to 1.3 m
+    (2.0, 2.0, False),    # walking away
+    (-1.5, 0.5, False),   # swept over 0.5 s only: to 1.95 m
+])
+def test_in_reach_sweeps_a_detection_across_the_path_by_hand(lateral, predict_s, reached):
+    # a 0.6 m box whose near side is 5 m ahead of the bumper; at 5 m/s the reach is
+    # 5 * (0.2 + 0.1) + 5^2 / 12 + 2 = 5.58 m (reaction and one frame to confirm, brake 6)
+    box = np.array([[3.8 + 5.0 + 0.3, 3.0, 0.5, 0.6, 0.6, 1.0, 0.0]])
+    driver = Driver(predict_s=predict_s)
+    speeds = None if lateral is None else np.array([lateral])
+    assert in_reach(box, 5.0, driver, speeds) is reached
+    assert not in_reach(box + [1.0, 0, 0, 0, 0, 0, 0], 5.0, driver, np.array([-3.0]))  # 6 m: out of reach
 
 
 def test_a_walker_always_detected_the_planner_that_predicts_stops_for(perception):
