@@ -117,21 +117,19 @@ class Tracker:
         noise = self._measurement_noise(centres)
         track_of = self._assign(z, noise)
         assigned = np.zeros(len(self._state), dtype=bool)
-        for c, t in enumerate(track_of):
-            if t >= 0:
-                close = self._correct(t, z[c], noise[c]) <= CLOSE
-                assigned[t] = True
-                self._run[t] = self._run[t] + 1 if close else 1
-        self._misses[assigned] = 0
-        self._misses[~assigned] += 1
-        self._run[self._misses >= 2] = 0
-
         speeds = np.zeros(len(z))
         for c, t in enumerate(track_of):
-            if t >= 0:
-                vy, sd = self._state[t, 3], math.sqrt(self._cov[t, 3, 3])
-                if self._run[t] >= MIN_RUN and abs(vy) >= max(MIN_LATERAL_SPEED, SIGNIFICANCE * sd):
-                    speeds[c] = vy
+            if t < 0:
+                continue
+            close = self._correct(t, z[c], noise[c]) <= CLOSE
+            assigned[t] = True
+            self._run[t] = self._run[t] + 1 if close else 1
+            vy, sd = self._state[t, 3], math.sqrt(self._cov[t, 3, 3])
+            if self._run[t] >= MIN_RUN and abs(vy) >= max(MIN_LATERAL_SPEED, SIGNIFICANCE * sd):
+                speeds[c] = vy
+        self._misses[assigned] = 0
+        self._misses[~assigned] += 1
+        self._run[self._misses >= 2] = 0  # two frames in a row without a detection end a run
 
         keep = self._misses <= MAX_MISSES
         new = track_of < 0
