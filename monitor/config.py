@@ -217,6 +217,13 @@ class ShieldConfig:
     confirm_width : float >= 0 or None
         Metres: the lateral span (:attr:`monitor.RiskReport.unseen`'s ``y_max - y_min``)
         under which an unseen object must be confirmed; None: every object must be.
+    emergency : float > deceleration, or None
+        With a path gate, a second stage (m/s^2): an unseen object within the *emergency
+        reach* (the braking distance at this deceleration, plus headway and margin) counts
+        at once, whatever its width beyond ``confirm_width``, and the shield requests this
+        deceleration; beyond it, within the reach, every object counts only once confirmed
+        and the shield requests ``deceleration``. None: one stage, wide objects count at
+        once anywhere in the reach.
     """
 
     threshold: float = 0.5
@@ -230,6 +237,7 @@ class ShieldConfig:
     confirm_frames: int = 2
     confirm_window: int = 3
     confirm_width: float | None = 0.3
+    emergency: float | None = 6.0
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -265,6 +273,12 @@ class ShieldConfig:
             if not (math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} = {getattr(self, name)!r}, must be >= 0 {unit}")
             _set(self, name, value)
+        if self.emergency is not None:
+            emergency = _number(self.emergency, "emergency")
+            if not (math.isfinite(emergency) and emergency > deceleration):
+                raise ValueError(f"emergency = {self.emergency!r}, must be > deceleration = {deceleration:g} "
+                                 "m/s^2 (or null: one stage)")
+            _set(self, "emergency", emergency)
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,15 @@ road read too near: a blob, a flake, a reflection) are small and flicker from pl
 place, so they engage nothing; a small obstacle stays and counts a frame or two later; a
 wide object counts at once.
 
+With ``emergency`` the gate has two stages, as automatic emergency braking grades its
+response: an object within the *emergency reach* (the distance to stop at ``emergency``,
+plus the headway and the margin) counts at once, as every wide object did with one stage,
+and the shield then requests ``emergency``; beyond it, where braking at ``deceleration`` is
+still enough, every object counts only once confirmed. A wide patch of road the depth
+reads too near for one frame in the far part of the reach brakes nothing; an obstacle
+there is confirmed a frame or two later, and one seen only late is met with the harder
+braking that its distance calls for.
+
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
 """
@@ -67,7 +76,11 @@ def describe_shield(config: ShieldConfig) -> str:
     parts.append(f"hold {config.hold_frames} frames")
     if config.path_half_width is not None and config.confirm_frames > 1:
         which = "objects" if config.confirm_width is None else f"objects under {config.confirm_width:g} m"
+        if config.emergency is not None and config.confirm_width is not None:
+            which += " (beyond the emergency reach: all)"
         parts.append(f"{which} confirmed in {config.confirm_frames} of {config.confirm_window} frames")
+    if config.path_half_width is not None and config.emergency is not None:
+        parts.append(f"emergency {config.emergency:g} m/s^2")
     return ", ".join(parts)
 
 
@@ -108,14 +121,17 @@ class Shield:
         """Forget the history (a new drive)."""
         self.engaged = False
         self._since_trigger = 0
+        self._decel = self.config.deceleration  # requested while engaged: the last trigger's
         self._history = deque(maxlen=self.config.confirm_window - 1)  # (time, unseen) of past frames
 
-    def reach(self, speed: float) -> float:
+    def reach(self, speed: float, deceleration: float | None = None) -> float:
         """Metres ahead of the front bumper in which an unseen object counts at ``speed``
-        m/s: the braking distance at the shield's deceleration, plus ``headway`` seconds of
-        travel and the ``margin``."""
+        m/s: the braking distance at ``deceleration`` m/s^2 (default: the config's
+        ``deceleration``; its ``emergency`` gives the emergency reach), plus ``headway``
+        seconds of travel and the ``margin``."""
         c = self.config
-        return speed * speed / (2.0 * c.deceleration) + speed * c.headway + c.margin
+        decel = c.deceleration if deceleration is None else deceleration
+        return speed * speed / (2.0 * decel) + speed * c.headway + c.margin
 
     def update(self, risk: float, speed: float | None = None, unseen=None,
                time: float | None = None) -> ShieldDecision:
@@ -138,18 +154,22 @@ class Shield:
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        in_path = True if c.path_half_width is None else self._in_path(speed, unseen, time)
-        if math.isnan(risk) or (risk > c.threshold and in_path):
+        decel = c.deceleration if c.path_half_width is None else self._in_path(speed, unseen, time)
+        if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
+            self._decel = max(decel, c.deceleration)
         elif self.engaged:
             self._since_trigger += 1
-            if (risk <= c.release or not in_path) and self._since_trigger > c.hold_frames:
+            if (risk <= c.release or decel == 0.0) and self._since_trigger > c.hold_frames:
                 self.engaged = False
-        return ShieldDecision(self.engaged, c.deceleration if self.engaged else 0.0, risk)
+        return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk)
 
-    def _in_path(self, speed, unseen, time) -> bool:
-        """Does an unseen object count in the path within reach (or is there no view to
-        tell)? One narrower than ``confirm_width`` counts only once confirmed."""
+    def _in_path(self, speed, unseen, time) -> float:
+        """The deceleration an unseen object in the path within reach calls for, m/s^2:
+        ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
+        it or for a frame without a view to tell, 0.0 for none. One narrower than
+        ``confirm_width``, and with ``emergency`` one beyond the emergency reach, counts only
+        once confirmed."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
@@ -168,24 +188,30 @@ class Shield:
                                  "needs each frame's time, finite seconds, increasing")
             time = float(time)
         if unseen is None:
-            counts = True
+            decel = c.deceleration
         else:
             w = c.path_half_width
             x, y_min, y_max = unseen.T
             near = unseen[(x - c.front <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)]
+            urgent = np.zeros(near.shape[0], dtype=bool)
+            if c.emergency is not None:
+                urgent = near[:, 0] - c.front <= self.reach(float(speed), c.emergency)
             unconfirmed = np.zeros(near.shape[0], dtype=bool)
-            if c.confirm_frames > 1:  # the small ones not seen standing there often enough
+            if c.confirm_frames > 1:  # those that must be seen standing there often enough
                 width = math.inf if c.confirm_width is None else c.confirm_width
                 unconfirmed = near[:, 2] - near[:, 1] < width
+                if c.emergency is not None:
+                    unconfirmed |= ~urgent
                 if unconfirmed.any():
                     hits = np.zeros(near.shape[0], dtype=np.int64)
                     for t, then in self._history:
                         hits += consistent(near, then, time - t, speed)
                     unconfirmed &= hits < c.confirm_frames - 1
-            counts = bool(np.any(~unconfirmed))
+            counts = ~unconfirmed
+            decel = c.emergency if np.any(counts & urgent) else c.deceleration if counts.any() else 0.0
         if c.confirm_frames > 1:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
-        return counts
+        return decel
 
 
 #: Metres of depth error ``consistent`` allows at any distance.

@@ -36,7 +36,9 @@ Avoidability (:func:`required_gap`): the hazard's *onset* is the first frame at 
 be seen (visible pixels in the image, within the monitor's range, and after its event: the
 lead's braking, the cut-in, the pedestrian's first step). A run is physically avoidable by
 the shield when the gap at onset exceeds what the ego needs to stop at the shield's
-deceleration after the reaction time, the hazard moving on as it does. From the onset to the
+deceleration (``ShieldConfig.deceleration``, its gentle stage; a shield with an emergency
+stage may also avoid some of the others) after the reaction time, the hazard moving on as
+it does. From the onset to the
 end of the baseline's drive, the onset also counts the frames and those in which the
 baseline's detector reported the hazard (score >= ``min_score``): a collision with a hazard
 the detector saw is the planner's to avoid, one with a hazard it missed is the monitor's.
@@ -261,7 +263,8 @@ HISTORY_KEYS = ("time", "speed", "gap", "risk", "engaged", "decel")
 def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
-    followed by ``<{confirm_width}`` when only objects under that width are confirmed."""
+    followed by ``<{confirm_width}`` when only objects under that width are confirmed, and
+    `` e{emergency}`` for a gate with an emergency stage."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
@@ -269,6 +272,8 @@ def driver_label(config: ShieldConfig | None) -> str:
         gate += f" c{config.confirm_frames}/{config.confirm_window}"
         if config.confirm_width is not None:
             gate += f"<{config.confirm_width:.2f}"
+    if config.path_half_width is not None and config.emergency is not None:
+        gate += f" e{config.emergency:g}"
     return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 

@@ -59,7 +59,7 @@ def test_shield_refuses_what_is_not_a_shield_config(config):
 # ------------------------------------------------------------------------- the path gate
 
 GATED = ShieldConfig(threshold=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
-                     margin=2.0, front=3.8, confirm_frames=1, confirm_window=1)
+                     margin=2.0, front=3.8, confirm_frames=1, confirm_window=1, emergency=None)
 
 
 def test_reach_is_the_braking_distance_plus_headway_and_margin():
@@ -146,7 +146,7 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3)
+                         confirm_width=0.3, emergency=None)  # one stage
 
 
 def _engaged(config, frames, speed=10.0, dt=0.1):
@@ -209,9 +209,69 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
+        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach: "
+         "all) confirmed in 2 of 3 frames, emergency 6 m/s^2")
+    one = ShieldConfig(emergency=None)
+    assert describe_shield(one) == \
         "threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
         "threshold 0.6, release 0.4, the risk alone (the paper's), hold 0 frames"
-    assert describe_shield(ShieldConfig(confirm_frames=1)) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
-    assert describe_shield(ShieldConfig(confirm_width=None)) == \
+    assert describe_shield(replace(one, confirm_frames=1)) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe_shield(replace(one, confirm_width=None)) == \
         "threshold 0.5, path gate 1.25 m, hold 5 frames, objects confirmed in 2 of 3 frames"
+
+
+# ------------------------------------------------------------------- the emergency stage
+
+STAGED = replace(CONFIRMED, hold_frames=2, emergency=6.0)
+
+
+def _decisions(config, frames, speed=10.0, dt=0.1):
+    shield = Shield(config)
+    return [shield.update(0.9, speed=speed, unseen=u, time=k * dt).deceleration for k, u in enumerate(frames)]
+
+
+def test_the_emergency_reach_is_the_braking_distance_at_the_emergency_deceleration():
+    # 10 m/s at 6 m/s^2: 100 / 12 = 8.33 m of braking, + 5 m of headway + 2 m of margin
+    assert Shield(STAGED).reach(10.0, 6.0) == pytest.approx(100 / 12 + 7.0)
+    assert Shield(STAGED).reach(10.0) == pytest.approx(100 / 6 + 7.0)
+
+
+def test_an_emergency_stage_acts_at_once_near_and_after_confirmation_beyond():
+    none = np.zeros((0, 3))
+    # at 10 m/s the emergency reach ends 15.33 m ahead of the bumper (x = 19.13 m), the reach
+    # at 3 m/s^2 23.67 m ahead (x = 27.47 m). A wide object 15 m ahead counts at once, at 6 m/s^2,
+    # and the hold of 2 frames keeps that deceleration
+    near = np.array([[3.8 + 15.0, -1.0, 1.0]])
+    assert _decisions(STAGED, [near, none, none, none]) == [6.0, 6.0, 6.0, 0.0]
+    # one 20 m ahead, beyond the emergency reach: only once it stood there in 2 of 3 frames
+    # (1 m closer each frame at 10 m/s), then at 3 m/s^2; at 15 m it calls for 6 m/s^2
+    far = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (20.0, 19.0, 18.0, 17.0, 16.0, 15.0)]
+    assert _decisions(STAGED, far) == [0.0, 3.0, 3.0, 3.0, 3.0, 6.0]
+    # a wide patch in a new place each frame beyond the emergency reach brakes nothing: left
+    # and right of the centreline (0.8 m apart, more than the 0.7 m allowed), and 6.5 m nearer
+    # after two frames (a standing object would be 2 m nearer, +-3.87 m at 19.8 m)
+    left, right = (-1.2, -0.4), (0.4, 1.2)
+    flicker = [np.array([[3.8 + d, *side]]) for d, side in ((22.5, left), (22.5, right), (16.0, left),
+                                                            (16.0, right))]
+    assert _decisions(STAGED, flicker) == [0.0, 0.0, 0.0, 0.0]
+    # without the stage (one stage) both count at once at 3 m/s^2
+    assert _decisions(replace(STAGED, emergency=None), [far[0]]) == [3.0]
+    # a small object within the emergency reach is still confirmed first
+    small = [np.array([[3.8 + 10.0, -0.1, 0.1]]), np.array([[3.8 + 9.0, -0.1, 0.1]])]
+    assert _decisions(STAGED, small) == [0.0, 6.0]
+    # without confirmation every object counts at once, at the deceleration its distance calls for
+    assert _decisions(replace(STAGED, confirm_frames=1, confirm_window=1, hold_frames=0),
+                      [far[0], near, none]) == [3.0, 6.0, 0.0]
+    # a frame without a view engages at 3 m/s^2 (its fail-safe risk)
+    assert _decisions(STAGED, [None]) == [3.0]
+
+
+def test_the_emergency_stage_is_checked_and_named():
+    with pytest.raises(ValueError, match=r"emergency = 3.0, must be > deceleration = 3 m/s\^2 \(or null"):
+        ShieldConfig(emergency=3.0)
+    with pytest.raises(ValueError, match="emergency = 'hard', must be a number"):
+        ShieldConfig(emergency="hard")
+    assert describe_shield(STAGED) == ("threshold 0.5, path gate 1.25 m, hold 2 frames, objects under 0.3 m "
+                                       "(beyond the emergency reach: all) confirmed in 2 of 3 frames, "
+                                       "emergency 6 m/s^2")

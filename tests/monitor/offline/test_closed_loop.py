@@ -179,6 +179,28 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     assert not confirming.collided and first[0] <= first[1] <= first[0] + 2
 
 
+def test_the_emergency_stage_stops_where_the_gentle_one_cannot(perception, monitor):
+    # unseen animals and wheelchairs at urban speed (seeds 0-14): when one first comes within
+    # the monitor's range, the gap is about 17 m, less than 3 m/s^2 needs at 10-13 m/s after
+    # the reaction time and more than 6 m/s^2 needs. The staged shield stops for every one
+    # whose gap 6 m/s^2 allows; the one-stage shield, braking at 3 m/s^2, hits at least 3
+    one = replace(monitor.config.shield, emergency=None)
+    room = gentle_hits = 0
+    for seed in range(15):
+        spec = ScenarioSpec("rare-object", "nominal", seed)
+        world = build_world(spec)
+        if world.regime != "urban" or world.hazard.actor.actor_class not in ("animal", "wheelchair"):
+            continue
+        base, staged, gentle = run_scenario(spec, perception, monitor, [monitor.config.shield, one],
+                                            condition=BLIND)
+        assert base.collided and max(gentle.history["decel"]) == 3.0
+        if base.onset["gap"] > required_gap(base.onset["speed"], 6.0, 0.2):
+            room += 1
+            assert not staged.collided and max(staged.history["decel"]) == 6.0, seed
+            gentle_hits += gentle.collided
+    assert room >= 6 and gentle_hits >= 3
+
+
 def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_traffic(perception, monitor):
     paper = _paper(monitor)
     gated = replace(paper, path_half_width=1.25)
@@ -186,7 +208,7 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
-    assert shielded.driver.endswith(" p1.25 c2/3<0.30")
+    assert shielded.driver.endswith(" p1.25 c2/3<0.30 e6")
     # a hazard-free drive with the blind detector: the risk is the rule base's worst whenever
     # traffic is in view. The paper's shield brakes in every frame and never arrives; the
     # gated one brakes only while something stands in the path within reach (a quarter of
