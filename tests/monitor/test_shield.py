@@ -149,9 +149,14 @@ CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, 
                          confirm_width=0.3, emergency=None)  # one stage
 
 
-def _engaged(config, frames, speed=10.0, dt=0.1):
+def _run(config, frames, speed=10.0, dt=0.1):
+    """The shield's decisions at risk 0.9 for ``frames`` of unseen objects, ``dt`` s apart."""
     shield = Shield(config)
-    return [shield.update(0.9, speed=speed, unseen=u, time=k * dt).engaged for k, u in enumerate(frames)]
+    return [shield.update(0.9, speed=speed, unseen=u, time=k * dt) for k, u in enumerate(frames)]
+
+
+def _engaged(config, frames):
+    return [d.engaged for d in _run(config, frames)]
 
 
 def test_a_confirming_gate_counts_a_small_object_once_it_stays():
@@ -226,9 +231,8 @@ def test_describe_names_the_shield():
 STAGED = replace(CONFIRMED, hold_frames=2, emergency=6.0)
 
 
-def _decisions(config, frames, speed=10.0, dt=0.1):
-    shield = Shield(config)
-    return [shield.update(0.9, speed=speed, unseen=u, time=k * dt).deceleration for k, u in enumerate(frames)]
+def _decisions(config, frames):
+    return [d.deceleration for d in _run(config, frames)]
 
 
 def test_the_emergency_reach_is_the_braking_distance_at_the_emergency_deceleration():
