@@ -54,7 +54,11 @@ in the manner of the stereo-vision obstacle detectors:
    over its blocks' rows) and that touches the road, or something in front of it, in fewer
    than ``min_contact`` of its columns is dropped. Both tests are needed: the top of a low
    box (debris) lies along the road but stands on it, and the raised rear of a trailer has
-   the road beneath it but is upright (off when ``max_incline`` is None).
+   the road beneath it but is upright (off when ``max_incline`` is None). Where nothing
+   valid lies beneath an object (the image's bottom edge cuts it, or the depth below is
+   invalid) contact cannot be told: such an object is dropped when its inverse depth grows
+   more than ``UNSUPPORTED_INCLINE`` times as fast as the road's, faster than the top of any
+   low obstacle; an upright face (near 0) or the top of debris is kept.
 6. **What hides nothing is no object.** What stands on the road hides what is behind it:
    right above its top the image sees the road far beyond it, the sky, or something
    standing behind it. A patch of road that the depth reads a little too near over a wide
@@ -109,6 +113,12 @@ OCCLUSION_RATIO = 1.1
 #: the first this many valid blocks below or above an object are looked at (a blurred
 #: edge is one)
 EDGE_BLOCKS = 3
+#: an object with nothing valid beneath it (cut by the image's bottom edge) is a patch of road
+#: read too near when its inverse depth grows down the image more than this many times as
+#: fast as the road's: the top of an obstacle h metres tall, seen from a camera H metres up,
+#: grows H / (H - h) times as fast (debris 0.3 m tall seen from 1.5 m: 1.25; a surface a
+#: third of the camera's height up: 1.5), an upright face not at all
+UNSUPPORTED_INCLINE = 1.5
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -215,7 +225,8 @@ class GeometricParams:
         Share in [0, 1]: an object that lies along the road (``max_incline``) and stands on
         the road or on something in front of it in fewer than this share of its columns
         (the road beneath it seen no farther than ``CONTACT_RATIO`` times its depth) floats
-        above the road, and is not an object.
+        above the road, and is not an object. One with nothing valid beneath it floats when
+        its incline exceeds the larger of ``max_incline`` and ``UNSUPPORTED_INCLINE``.
     min_occlusion : float or None
         Share in [0, 1]: an object that hides what is behind it (see the module's rule 6) in
         fewer than this share of its columns is a patch of road read too near, not an
@@ -537,7 +548,9 @@ class GeometricRetriever:
         xs, ys, zs, ds = points
         if p.max_incline is not None:
             shape = kernels.surface_shape(labels, index, ds, p.stride, qv, CONTACT_RATIO, EDGE_BLOCKS)
-            out |= (shape[:, 0] > p.max_incline) & (shape[:, 1] < p.min_contact)
+            incline, contact = shape[:, 0], shape[:, 1]
+            out |= (incline > p.max_incline) & (contact < p.min_contact)
+            out |= np.isnan(contact) & (incline > max(p.max_incline, UNSUPPORTED_INCLINE))
         if p.min_occlusion is not None:
             hides = kernels.occlusion(labels, index, ds, xs, ys, zs, np.array(ground, dtype=np.float64),
                                       np.array([q0, qu, qv]), p.stride, p.min_height, OCCLUSION_RATIO,

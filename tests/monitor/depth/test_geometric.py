@@ -170,6 +170,26 @@ def test_a_patch_of_road_read_too_near_floats_and_is_no_object_what_stands_stays
         assert _match(ruled, _truth(labels, depth, k))[1] > 0.3  # debris: its top 0.1 m only
 
 
+def test_at_the_image_bottom_a_patch_read_too_near_floats_what_stands_stays():
+    # the bottom row sees the road 6.3 m ahead of the ego origin (2.5 m ahead of the bumper):
+    # nothing lies beneath what the bottom edge cuts, so contact cannot be told
+    road, _ = _render([])
+    blob = road.copy()
+    blob[848:900, 700:900] *= np.float32(0.5)  # read at half the road's depth: incline 2
+    off = GeometricParams(max_incline=None)
+    assert GeometricRetriever(CAMERA, off)(blob).shape == (1, 5)
+    assert GeometricRetriever(CAMERA)(blob).shape == (0, 5)
+    # cut by the bottom edge too: a box 0.8 m tall 1.5 m ahead of the bumper (an upright face,
+    # incline about 0) and debris 0.3 m tall 1.5-2.1 m ahead, of which only the top is in view
+    # (it lies along the road: incline 1.5 / (1.5 - 0.3) = 1.25, under 1.5)
+    for box in ([5.5, 0.0, 0.4, 0.8, 0.4, 0.8, 0.0], [5.6, 0.0, 0.15, 0.8, 0.6, 0.3, 0.0]):
+        depth, labels = _render([box])
+        assert (labels[-1] == 1).any()  # cut by the image's bottom edge
+        ruled, plain = GeometricRetriever(CAMERA)(depth), GeometricRetriever(CAMERA, off)(depth)
+        np.testing.assert_array_equal(ruled, plain)
+        assert _match(ruled, _truth(labels, depth, 0))[1] > 0.5
+
+
 def test_a_wide_patch_of_road_read_a_little_too_near_hides_nothing_and_is_no_object():
     road, _ = _render([])
     rows, cols = np.mgrid[0:road.shape[0], 0:road.shape[1]].astype(np.float32)
