@@ -224,6 +224,13 @@ class ShieldConfig:
         deceleration; beyond it, within the reach, every object counts only once confirmed
         and the shield requests ``deceleration``. None: one stage, wide objects count at
         once anywhere in the reach.
+    confirm_near : float >= 0 or None
+        With a path gate that confirms: metres ahead of the front bumper within which every
+        unseen object counts only once confirmed, whatever its width. A camera sees the road
+        from some distance ahead of the bumper (nuScenes' front camera from 2.5 m, its lowest
+        row); what stands nearer reaches into the image's bottom rows, where the depth view
+        cannot see the road beneath it, and a standing obstacle there was in view in the
+        frame before. None: no such zone.
     """
 
     threshold: float = 0.5
@@ -238,6 +245,7 @@ class ShieldConfig:
     confirm_window: int = 3
     confirm_width: float | None = 0.3
     emergency: float | None = 6.0
+    confirm_near: float | None = 2.5
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -268,6 +276,12 @@ class ShieldConfig:
                 raise ValueError(f"confirm_width = {self.confirm_width!r}, must be >= 0 metres "
                                  "(or null: every unseen object is confirmed)")
             _set(self, "confirm_width", width)
+        if self.confirm_near is not None:
+            near = _number(self.confirm_near, "confirm_near")
+            if not (math.isfinite(near) and near >= 0):
+                raise ValueError(f"confirm_near = {self.confirm_near!r}, must be >= 0 metres "
+                                 "(or null: no zone near the bumper)")
+            _set(self, "confirm_near", near)
         for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
             value = _number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0):

@@ -146,7 +146,7 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3, emergency=None)  # one stage
+                         confirm_width=0.3, emergency=None, confirm_near=None)  # one stage, no near zone
 
 
 def _run(config, frames, speed=10.0, dt=0.1):
@@ -214,9 +214,12 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
-        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach: "
-         "all) confirmed in 2 of 3 frames, emergency 6 m/s^2")
-    one = ShieldConfig(emergency=None)
+        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
+         "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2")
+    assert describe_shield(ShieldConfig(emergency=None)) == \
+        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
+         "bumper: all) confirmed in 2 of 3 frames")
+    one = ShieldConfig(emergency=None, confirm_near=None)
     assert describe_shield(one) == \
         "threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
@@ -231,8 +234,8 @@ def test_describe_names_the_shield():
 STAGED = replace(CONFIRMED, hold_frames=2, emergency=6.0)
 
 
-def _decisions(config, frames):
-    return [d.deceleration for d in _run(config, frames)]
+def _decisions(config, frames, speed=10.0):
+    return [d.deceleration for d in _run(config, frames, speed)]
 
 
 def test_the_emergency_reach_is_the_braking_distance_at_the_emergency_deceleration():
@@ -269,6 +272,27 @@ def test_an_emergency_stage_acts_at_once_near_and_after_confirmation_beyond():
                       [far[0], near, none]) == [3.0, 6.0, 0.0]
     # a frame without a view engages at 3 m/s^2 (its fail-safe risk)
     assert _decisions(STAGED, [None]) == [3.0]
+
+
+def test_near_the_bumper_every_object_is_confirmed_first():
+    near_zone = replace(STAGED, confirm_near=2.5)
+    none = np.zeros((0, 3))
+    # at 4 m/s (0.4 m a frame) the emergency reach ends 4^2 / 12 + 2 + 2 = 5.33 m ahead of the
+    # bumper. A wide object 1.0 m ahead: only once it stood there in 2 of 3 frames (0.6 m ahead
+    # a frame later), then at 6 m/s^2; in a new place each frame (left, then right of the
+    # centreline, more than 0.5 + 2 * 0.1 m apart), never
+    wide = [np.array([[3.8 + d, -0.5, 0.5]]) for d in (1.0, 0.6)]
+    assert _decisions(near_zone, wide + [none], speed=4.0) == [0.0, 6.0, 6.0]
+    flicker = [np.array([[3.8 + 1.0, -1.2, -0.9]]), np.array([[3.8 + 0.6, 0.0, 1.0]])]
+    assert _decisions(near_zone, flicker, speed=4.0) == [0.0, 0.0]
+    # 3 m ahead, beyond the zone and within the emergency reach: at once
+    assert _decisions(near_zone, [np.array([[3.8 + 3.0, -0.5, 0.5]])], speed=4.0) == [6.0]
+    # without the zone the object 1.0 m ahead counts at once
+    assert _decisions(STAGED, wide[:1], speed=4.0) == [6.0]
+    with pytest.raises(ValueError, match=r"confirm_near = -1.0, must be >= 0 metres \(or null"):
+        ShieldConfig(confirm_near=-1.0)
+    with pytest.raises(ValueError, match="confirm_near = 'close', must be a number"):
+        ShieldConfig(confirm_near="close")
 
 
 def test_the_emergency_stage_is_checked_and_named():
