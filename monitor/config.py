@@ -270,18 +270,13 @@ class ShieldConfig:
                 raise ValueError(f"path_half_width = {self.path_half_width!r}, must be > 0 metres "
                                  "(or null: no path gate)")
             _set(self, "path_half_width", width)
-        if self.confirm_width is not None:
-            width = _number(self.confirm_width, "confirm_width")
-            if not (math.isfinite(width) and width >= 0):
-                raise ValueError(f"confirm_width = {self.confirm_width!r}, must be >= 0 metres "
-                                 "(or null: every unseen object is confirmed)")
-            _set(self, "confirm_width", width)
-        if self.confirm_near is not None:
-            near = _number(self.confirm_near, "confirm_near")
-            if not (math.isfinite(near) and near >= 0):
-                raise ValueError(f"confirm_near = {self.confirm_near!r}, must be >= 0 metres "
-                                 "(or null: no zone near the bumper)")
-            _set(self, "confirm_near", near)
+        for name, null in (("confirm_width", "every unseen object is confirmed"),
+                           ("confirm_near", "no zone near the bumper")):
+            if getattr(self, name) is not None:
+                value = _number(getattr(self, name), name)
+                if not (math.isfinite(value) and value >= 0):
+                    raise ValueError(f"{name} = {getattr(self, name)!r}, must be >= 0 metres (or null: {null})")
+                _set(self, name, value)
         for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
             value = _number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0):
