@@ -180,8 +180,8 @@ class Shield:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
-        ``confirm_width``, and with ``emergency`` one beyond the emergency reach, counts only
-        once confirmed."""
+        ``confirm_width``, with ``emergency`` one beyond the emergency reach, and one within
+        ``confirm_near`` of the bumper count only once confirmed."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):

@@ -38,10 +38,10 @@ lead's braking, the cut-in, the pedestrian's first step). A run is physically av
 the shield when the gap at onset exceeds what the ego needs to stop at the shield's
 deceleration (``ShieldConfig.deceleration``, its gentle stage; a shield with an emergency
 stage may also avoid some of the others) after the reaction time, the hazard moving on as
-it does. From the onset to the
-end of the baseline's drive, the onset also counts the frames and those in which the
-baseline's detector reported the hazard (score >= ``min_score``): a collision with a hazard
-the detector saw is the planner's to avoid, one with a hazard it missed is the monitor's.
+it does. From the onset to the end of the baseline's drive, the onset also counts the
+frames and those in which the baseline's detector reported the hazard (score >=
+``min_score``): a collision with a hazard the detector saw is the planner's to avoid, one
+with a hazard it missed is the monitor's.
 """
 from __future__ import annotations
 
