@@ -131,12 +131,12 @@ def test_gate_settings_are_checked(field, value, message):
 def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion():
     now = np.array([[20.0, -0.5, 0.5]])
     # dt 0.1 s at 10 m/s: the ego travels 1 m, so a standing object stood at 21 m; x tolerance
-    # 0.5 + 0.15 * 20 + 2 * 0.1 = 3.7 m: then-x in [17.3, 24.7]; y tolerance 0.5 + 0.2 = 0.7 m
+    # 0.5 + 0.15 * 20 + 2 * 0.1 = 3.7 m: then-x in [17.3, 24.7]; y tolerance 0.3 + 0.2 = 0.5 m
     for x_then, expected in ((21.0, True), (20.0, True), (24.69, True), (24.71, False), (17.31, True),
                              (17.29, False)):
         assert consistent(now, np.array([[x_then, -0.5, 0.5]]), 0.1, 10.0)[0] is np.bool_(expected), x_then
-    for span, expected in (((1.19, 2.0), True), ((1.21, 2.0), False), ((-3.0, -1.19), True),
-                           ((-3.0, -1.21), False)):
+    for span, expected in (((0.99, 2.0), True), ((1.01, 2.0), False), ((-3.0, -0.99), True),
+                           ((-3.0, -1.01), False)):
         assert consistent(now, np.array([[21.0, *span]]), 0.1, 10.0)[0] is np.bool_(expected), span
     # several objects each way: any one of then will do, each of now answered apart
     now2 = np.array([[20.0, -0.5, 0.5], [8.0, 2.0, 3.0]])
