@@ -228,7 +228,7 @@ class Shield:
         return decel
 
 
-#: Metres of depth error ``consistent`` allows at any distance.
+#: Metres of depth error ``consistent`` allows along the line of sight, at any distance.
 MATCH_ABS_M = 0.5
 #: Metres an object's lateral span may move between frames besides its own motion: the span
 #: comes from the object's pixel columns, which the depth error hardly moves within the
