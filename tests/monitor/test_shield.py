@@ -256,9 +256,10 @@ def test_an_emergency_stage_acts_at_once_near_and_after_confirmation_beyond():
     far = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (20.0, 19.0, 18.0, 17.0, 16.0, 15.0)]
     assert _decisions(STAGED, far) == [0.0, 3.0, 3.0, 3.0, 3.0, 6.0]
     # a wide patch in a new place each frame beyond the emergency reach brakes nothing: left
-    # and right of the centreline (0.8 m apart, more than the 0.7 m allowed), and 6.5 m nearer
-    # after two frames (a standing object would be 2 m nearer, +-3.87 m at 19.8 m)
-    left, right = (-1.2, -0.4), (0.4, 1.2)
+    # and right of the centreline (0.6 m apart, more than the 0.3 + 2 * 0.1 m allowed across the
+    # path), and 6.5 m nearer after two frames (a standing object would be 2 m nearer, +-3.87 m
+    # at 19.8 m)
+    left, right = (-1.2, -0.3), (0.3, 1.2)
     flicker = [np.array([[3.8 + d, *side]]) for d, side in ((22.5, left), (22.5, right), (16.0, left),
                                                             (16.0, right))]
     assert _decisions(STAGED, flicker) == [0.0, 0.0, 0.0, 0.0]
@@ -280,7 +281,7 @@ def test_near_the_bumper_every_object_is_confirmed_first():
     # at 4 m/s (0.4 m a frame) the emergency reach ends 4^2 / 12 + 2 + 2 = 5.33 m ahead of the
     # bumper. A wide object 1.0 m ahead: only once it stood there in 2 of 3 frames (0.6 m ahead
     # a frame later), then at 6 m/s^2; in a new place each frame (left, then right of the
-    # centreline, more than 0.5 + 2 * 0.1 m apart), never
+    # centreline, more than 0.3 + 2 * 0.1 m apart), never
     wide = [np.array([[3.8 + d, -0.5, 0.5]]) for d in (1.0, 0.6)]
     assert _decisions(near_zone, wide + [none], speed=4.0) == [0.0, 6.0, 6.0]
     flicker = [np.array([[3.8 + 1.0, -1.2, -0.9]]), np.array([[3.8 + 0.6, 0.0, 1.0]])]
