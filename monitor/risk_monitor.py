@@ -39,6 +39,7 @@ several threads at once (the retrieval keeps one set of scratch buffers per thre
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -133,7 +134,9 @@ class RiskReport:
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        """A JSON-ready summary (boxes as lists)."""
+        """A JSON-ready summary (boxes as lists) that strict JSON can hold: ``free_distance``
+        is null where not measured (NaN) and the string ``"inf"`` where the corridor is free
+        to the view's range (``float("inf")`` reads it back)."""
         return {
             "risk": self.risk, "status": self.status, "reason": self.reason,
             "iou": None if np.isnan(self.iou) else self.iou,
@@ -141,10 +144,15 @@ class RiskReport:
             "S": self.S.tolist(), "P": self.P.tolist(),
             "matched": [] if self.alignment is None else self.alignment.partner.tolist(),
             "fired": [{"rule": r + 1, "text": t, "strength": s} for r, t, s in self.fired],
-            "free_distance": None if np.isnan(self.free_distance) else self.free_distance,
+            "free_distance": _json_distance(self.free_distance),
             "unseen": None if self.unseen is None else self.unseen.tolist(),
             "timings_ms": {k: 1e3 * v for k, v in self.timings.items()},
         }
+
+
+def _json_distance(value: float) -> float | str | None:
+    """A distance as strict JSON holds it: null for NaN, ``"inf"`` for inf, else the number."""
+    return None if math.isnan(value) else "inf" if math.isinf(value) else value
 
 
 class RiskMonitor:

@@ -365,6 +365,10 @@ def test_no_objects_states_its_risk_and_the_geometric_view_its_free_distance(geo
     seen = geometric_monitor.step(_depth(PEDESTRIAN), PEDESTRIAN)
     assert seen.status == OK and seen.free_distance == pytest.approx(8.65, abs=0.01)
     assert seen.to_dict()["free_distance"] == seen.free_distance
+    # strict JSON (no Infinity, no NaN) holds every case: measured, free to the range, unmeasured
+    for report, stored in ((seen, seen.free_distance), (geometric_monitor.step(road, PEDESTRIAN), "inf"),
+                           (monitor.step(road, PEDESTRIAN), None)):
+        assert json.loads(json.dumps(report.to_dict(), allow_nan=False))["free_distance"] == stored
 
 
 def test_a_surface_filling_the_view_is_a_near_object_to_the_geometric_view_and_no_view_to_the_paper(

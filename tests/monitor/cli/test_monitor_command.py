@@ -13,6 +13,7 @@ from monitor.depth.prior import load_prior
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
+from monitor.synthetic import render_depth
 from recording_fixture import read_rows, write_prior, write_recording
 from shield_reference import GATE_YAML, gated_engaged
 
@@ -169,6 +170,20 @@ def test_unprocessable_frames_are_reported_and_strict_stops(recording, tmp_path,
     assert main(argv[:2] + [str(tmp_path / "strict")] + argv[3:] + ["--strict"]) == 2
     err = capsys.readouterr().err
     assert "scene 'drive-a' frame 4 (000004)" in err and "--strict: stopped" in err
+
+
+def test_an_empty_road_is_written_as_strict_json(recording, tmp_path):
+    # the geometric view finds nothing on an empty road: its free distance is inf, which strict
+    # JSON cannot hold as a number (it once stopped the run)
+    root, frames, prior = recording
+    rec = tmp_path / "drive-a"
+    shutil.copytree(root / "drive-a", rec)
+    road = render_depth(frames[0].camera, np.zeros((0, 7))).depth
+    np.save(rec / "depth" / "000003.npy", np.where(np.isfinite(road), road, 80.0).astype(np.float32))
+    assert main(["monitor", "-o", str(tmp_path / "out"), "--recording", str(rec), "--prior", str(prior)]) == 0
+    rows = read_rows(tmp_path / "out")["drive-a.jsonl"]
+    assert rows[3]["S"] == [] and rows[3]["free_distance"] == "inf"
+    assert all(isinstance(r["free_distance"], float) for r in rows if r["S"])
 
 
 def test_synthetic_scenes_by_default(tmp_path):
