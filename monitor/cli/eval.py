@@ -20,6 +20,11 @@ Below them, the paper's tables:
 - Table III: approved true positives and identified false negatives per condition;
 - the RMSE of every rule base in the rules folder against 1 - USC~ on the held-out test
   scenes (split by scene, never by frame).
+
+``frames.jsonl`` holds what they are computed from, one line per frame of every scene
+(training and test): its status, features, object counts, target, hazard and each rule
+base's risk (:func:`monitor.offline.measures.frame_rows`), for finding the frames behind a
+false alarm or measuring something the report does not.
 """
 from __future__ import annotations
 
@@ -35,7 +40,8 @@ from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, coun
 from monitor.config import load_config
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
                                 recall_table, rmse_table)
-from monitor.offline.measures import HazardCriterion, frame_truth, quality_tables, training_mean
+from monitor.offline.measures import (HazardCriterion, frame_rows, frame_truth, quality_tables,
+                                      rule_base_risk, training_mean)
 from monitor.offline.run import observe_plans
 from monitor.report.quality_figure import save_quality_figure
 from monitor.shipped import rules_dir, shipped_rules
@@ -53,7 +59,7 @@ DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gt
               ("no-rule-fired", "no rule", "{:.0%}")]
 
 #: the files the command writes in its output folder (checked before the work starts)
-OUTPUTS = ("report.md", "tables.json", "quality.png")
+OUTPUTS = ("report.md", "tables.json", "quality.png", "frames.jsonl")
 
 CORRELATION = [("alpha", "alpha", "{}"), ("beta", "beta", "{}"), ("frames", "frames", "{}"),
                ("iou_r", "r IoU~", "{:.2f}"), ("rdd_r", "r RDD~", "{:.2f}")]
@@ -113,9 +119,10 @@ def run(args: argparse.Namespace) -> int:
     if not systems:
         raise ValueError(f"no rule bases (.yaml, .fis) in {folder}")
 
+    truth = [frame_truth(ob, criterion) for ob in observations]
     test = [ob for ob in observations if ob.scene in test_names]
-    train_truth = [frame_truth(ob, criterion) for ob in observations if ob.scene not in test_names]
-    test_truth = [frame_truth(ob, criterion) for ob in test]
+    train_truth = [t for t, ob in zip(truth, observations) if ob.scene not in test_names]
+    test_truth = [t for t, ob in zip(truth, observations) if ob.scene in test_names]
     reference, reference_note = training_mean(train_truth, test_truth)
     threshold = config.shield.threshold
     quality, depth_view, risks = quality_tables(test, test_truth, systems, reference, threshold,
@@ -171,5 +178,8 @@ def run(args: argparse.Namespace) -> int:
             lines += [f"![ROC and risk against target]({figure.name})", ""]
     write_text(out / "report.md", "\n".join(lines))
     write_text(out / "tables.json", json.dumps({"note": selection.note, **tables}, indent=1))
+    every_risk = {name: rule_base_risk(observations, fis, config.risk.fail_safe) for name, fis in systems.items()}
+    rows = frame_rows(observations, truth, every_risk, test_names)
+    write_text(out / "frames.jsonl", "".join(json.dumps(row, allow_nan=False) + "\n" for row in rows))
     print(f"\nreport: {out / 'report.md'}")
     return 0

@@ -431,3 +431,45 @@ def quality_tables(observations: Sequence[Observation], truth: Sequence[FrameTru
             risk_rows.append({"condition": condition, "predictor": name,
                               **risk_quality(r[mask], frames, reference, threshold)})
     return risk_rows, depth_rows, risks
+
+
+def frame_rows(observations: Sequence[Observation], truth: Sequence[FrameTruth], risks: dict,
+               test_scenes) -> list[dict]:
+    """One JSON-ready row per observed frame: what each measure above is computed from.
+
+    Parameters
+    ----------
+    observations : sequence of Observation
+    truth : sequence of FrameTruth
+        :func:`frame_truth` of each observation.
+    risks : dict of str -> ndarray of shape (n_frames,)
+        Each rule base's risk per observation (:func:`rule_base_risk`).
+    test_scenes : collection of str
+        The held-out scenes (their rows say ``"split": "test"``, the others ``"train"``).
+
+    Returns
+    -------
+    list of dict
+        ``scene, condition, split, frame, time, status``; the features ``iou, rdd`` (null
+        unless the rule base ran); ``objects`` (S), ``unseen`` (of those, how many no
+        detection covers; null for a frame without a view), ``detections`` (P); ``target``
+        (1 - USC~, null without ground truth in range), ``hazard``, ``gts``, ``found``,
+        ``on_truth`` (:class:`FrameTruth`); ``risk``, rule base name -> risk.
+    """
+    if not len(observations) == len(truth) == len(next(iter(risks.values()), truth)):
+        raise ValueError(f"{len(observations)} observations, {len(truth)} FrameTruth and risks of "
+                         f"{[len(r) for r in risks.values()]} frames; expected one each")
+    rows = []
+    for k, (ob, t) in enumerate(zip(observations, truth)):
+        report = ob.report
+        rows.append({
+            "scene": ob.scene, "condition": ob.condition,
+            "split": "test" if ob.scene in test_scenes else "train", "frame": ob.index,
+            "time": ob.timestamp, "status": report.status,
+            "iou": None if math.isnan(report.iou) else report.iou,
+            "rdd": None if math.isnan(report.rdd) else report.rdd,
+            "objects": t.objects, "unseen": None if report.unseen is None else len(report.unseen),
+            "detections": len(ob.P), "target": None if math.isnan(t.target) else t.target,
+            "hazard": t.hazard, "gts": t.gts, "found": t.found, "on_truth": t.on_truth,
+            "risk": {name: float(r[k]) for name, r in risks.items()}})
+    return rows

@@ -44,6 +44,27 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
     shipped = sorted(p.name for p in Path("rules").glob("*.yaml"))
     assert sorted(r["rules"] for r in tables["rmse"]) == shipped
 
+    # the per-frame table: every frame of both scenes; the held-out ones give the headline again
+    frames = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
+    assert [(f["split"], f["frame"]) for f in frames] == [("train", 0), ("train", 1), ("test", 0), ("test", 1)]
+    test = [f for f in frames if f["split"] == "test"]
+    for name in shipped:
+        row = next(r for r in tables["quality"] if r["condition"] == "all" and r["predictor"] == name)
+        risk = np.array([f["risk"][name] for f in test])
+        hazard = np.array([f["hazard"] for f in test])
+        assert row["hazards"] == hazard.sum()
+        if hazard.any():
+            assert row["hit_rate"] == np.mean(risk[hazard] > 0.5)
+        scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
+        if scored:
+            err = np.array([r - t for r, t in scored])
+            assert row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
+    fis = fuzzcore.load("rules/fuzzrisk.yaml")
+    for f in frames:
+        if f["status"] == "ok":
+            assert f["risk"]["fuzzrisk.yaml"] == fis.infer(f["iou"], f["rdd"])
+        assert f["unseen"] is None or f["unseen"] <= f["objects"]
+
     # the same RMSE another way: the held-out scene's feature table through the rule base
     features = tmp_path / "test.csv"
     assert main(["features", "-o", str(features), "--split", "test", *SMALL]) == 0
