@@ -456,7 +456,8 @@ def frame_rows(observations: Sequence[Observation], truth: Sequence[FrameTruth],
         (1 - USC~, null without ground truth in range), ``hazard``, ``gts``, ``found``,
         ``on_truth`` (:class:`FrameTruth`); ``risk``, rule base name -> risk.
     """
-    if not len(observations) == len(truth) == len(next(iter(risks.values()), truth)):
+    lengths = {len(observations), len(truth), *(len(r) for r in risks.values())}
+    if len(lengths) > 1:
         raise ValueError(f"{len(observations)} observations, {len(truth)} FrameTruth and risks of "
                          f"{[len(r) for r in risks.values()]} frames; expected one each")
     rows = []

@@ -1,4 +1,5 @@
 """Tests for monitor.offline.measures: every measure against values worked out by hand."""
+import json
 import math
 
 import numpy as np
@@ -10,7 +11,7 @@ from monitor.offline.evaluation import Observation
 from monitor.offline.groundtruth import score
 from monitor.offline.measures import (
     FrameTruth, HazardCriterion, alarm_rates, auprc, auroc, coverage, depth_view_quality,
-    fpr_at_tpr, frame_truth, pearson, risk_quality, rmse, roc_curve, rule_base_risk, skill, spearman,
+    fpr_at_tpr, frame_rows, frame_truth, pearson, risk_quality, rmse, roc_curve, rule_base_risk, skill, spearman,
 )
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, OK, RiskReport
 from monitor.shipped import shipped_rules
@@ -185,6 +186,20 @@ def test_rule_base_risk_keeps_the_reported_risk_of_frames_without_features():
            _observation(INVALID_INPUT, S, P, G, risk=1.0)]
     risk = rule_base_risk(obs, fis, fail_safe_risk=1.0)
     np.testing.assert_allclose(risk, [fis.infer(iou=0.7, rdd=0.05), 0.0, 1.0])
+
+
+def test_frame_rows_hold_each_frames_truth_and_risks_as_strict_json():
+    obs = [_observation(OK, S, P, G, iou=0.7, rdd=0.05), _observation(INVALID_INPUT, S, P, G, risk=1.0)]
+    truth = [frame_truth(ob) for ob in obs]
+    rows = frame_rows(obs, truth, {"a": np.array([0.4, 1.0])}, test_scenes={"scene"})
+    assert json.loads(json.dumps(rows, allow_nan=False)) == rows
+    assert [(r["split"], r["status"], r["iou"], r["rdd"], r["risk"]) for r in rows] == [
+        ("test", OK, 0.7, 0.05, {"a": 0.4}), ("test", INVALID_INPUT, None, None, {"a": 1.0})]
+    assert (rows[1]["objects"], rows[1]["found"], rows[1]["hazard"]) == (0, 0, True)  # no view
+    assert rows[0]["target"] == score(P, G).target and rows[0]["detections"] == len(P)
+    assert frame_rows(obs, truth, {"a": np.zeros(2)}, test_scenes=())[0]["split"] == "train"
+    with pytest.raises(ValueError, match=r"2 observations, 2 FrameTruth and risks of \[3\] frames"):
+        frame_rows(obs, truth, {"a": np.zeros(3)}, test_scenes=())
 
 
 def _truth(target, hazard, status=OK, gts=1, found=0, objects=0, on_truth=0):
