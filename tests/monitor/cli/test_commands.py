@@ -10,6 +10,7 @@ import pytest
 
 import fuzzcore
 from monitor.cli import main
+from monitor.config import load_config
 
 # a tiny synthetic benchmark: two nominal scenes of two frames, one of them held out
 SMALL = ["--scenes", "2", "--test-scenes", "1", "--frames", "2", "--prior-scenes", "1",
@@ -54,7 +55,7 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
         hazard = np.array([f["hazard"] for f in test])
         assert row["hazards"] == hazard.sum()
         if hazard.any():
-            assert row["hit_rate"] == np.mean(risk[hazard] > 0.5)
+            assert row["hit_rate"] == np.mean(risk[hazard] > load_config().shield.threshold)
         scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
         if scored:
             err = np.array([r - t for r, t in scored])
