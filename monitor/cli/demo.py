@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
         series.append({"name": scene.name, "time": times, "risk": risks, "target": targets, "status": statuses})
     bar.close()
 
-    write_text(out / "frames.jsonl", "".join(json.dumps(row) + "\n" for row in rows))
+    write_text(out / "frames.jsonl", "".join(json.dumps(row, allow_nan=False) + "\n" for row in rows))
     figures = {"fis.png": save_fis_figure(fis, out / "fis.png"),
                "risk_timeline.png": save_risk_timeline(series, out / "risk_timeline.png",
                                                         config.shield.threshold)}
