@@ -53,13 +53,11 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
         row = next(r for r in tables["quality"] if r["condition"] == "all" and r["predictor"] == name)
         risk = np.array([f["risk"][name] for f in test])
         hazard = np.array([f["hazard"] for f in test])
-        assert row["hazards"] == hazard.sum()
-        if hazard.any():
-            assert row["hit_rate"] == np.mean(risk[hazard] > load_config().shield.threshold)
+        assert row["hazards"] == hazard.sum() > 0  # this street's frames hold missed objects
+        assert row["hit_rate"] == np.mean(risk[hazard] > load_config().shield.threshold)
         scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
-        if scored:
-            err = np.array([r - t for r, t in scored])
-            assert row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
+        err = np.array([r - t for r, t in scored])
+        assert len(scored) > 0 and row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
     fis = fuzzcore.load("rules/fuzzrisk.yaml")
     for f in frames:
         if f["status"] == "ok":
