@@ -215,6 +215,10 @@ class Tuner:
     def _settings(self) -> dict:
         return {k: v for k, v in self.get_params().items() if k not in ("system", "callback", "seed")}
 
+    def _label(self) -> str:
+        """How the description names this run: the method and its seed."""
+        return f"{self.method} (seed {self.seed})"
+
     def _provenance(self, system, result: OptimizeResult, **extra):
         """``system`` with a description and ``metadata["tuning"]`` saying how it was made."""
         tuning = {
@@ -229,7 +233,7 @@ class Tuner:
             "nit": result.nit, "nfev": result.nfev, "message": result.message, **extra,
         }
         description = (f"{self.system.description + '; ' if self.system.description else ''}"
-                       f"{self.method} (seed {self.seed}) on {result.n_samples} samples: "
+                       f"{self._label()} on {result.n_samples} samples: "
                        f"{result.metric} {result.initial_fun:.4g} -> {result.fun:.4g}")
         metadata = {**system.metadata, "tuning": plain(tuning)}
         return dataclasses.replace(system, description=description, metadata=metadata)

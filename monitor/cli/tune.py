@@ -1,4 +1,4 @@
-"""``fuzzrisk tune --features train.csv --method patternsearch|pso|joint --rules R.yaml -o OUT.yaml``.
+"""``fuzzrisk tune --features train.csv --method patternsearch|pso|joint|lse --rules R.yaml -o OUT.yaml``.
 
 Tunes a rule base on a feature table (:func:`fuzzcore.tune.read_csv`: the rule base's
 inputs, ``target`` = 1 - USC~, optional ``scene``), as the paper builds its variants:
@@ -7,7 +7,10 @@ inputs, ``target`` = 1 - USC~, optional ``scene``), as the paper builds its vari
   scene, 1000 iterations per fold (the "tuned" FIS);
 - ``pso``: rule consequents by particle swarm, a swarm of 100 for 20 iterations (the
   "learned" FIS);
-- ``joint``: both, alternated until neither improves (the paper's future work).
+- ``joint``: both, alternated until neither improves (the paper's future work);
+- ``lse``: a Sugeno system with the rule base's antecedents, one output term per rule
+  (``--order 1``: linear, ``0``: constant) fitted by least squares, inside the output's
+  range and monotone along the ``--monotone`` inputs (:class:`fuzzcore.tune.LeastSquares`).
 
 The tuned system is written as YAML, named after the output file, with
 ``metadata.tuning`` saying how it was made (method, settings, seed, the starting rule
@@ -36,9 +39,10 @@ from tqdm import tqdm
 
 import fuzzcore
 from fuzzcore.io import check_save_path
-from fuzzcore.tune import JointTuner, ParticleSwarm, PatternSearch, read_csv
+from fuzzcore.tune import JointTuner, LeastSquares, ParticleSwarm, PatternSearch, read_csv
+from fuzzcore.verification import parse_monotone
 
-METHODS = ("patternsearch", "pso", "joint")
+METHODS = ("patternsearch", "pso", "joint", "lse")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -68,6 +72,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     pso.add_argument("--swarm-size", type=int, default=100, help="particles (default %(default)s)")
     pso.add_argument("--swarm-iter", type=int, default=20, help="iterations (default %(default)s)")
     pso.add_argument("--allow-off", action="store_true", help="rules may be switched off")
+    lse = parser.add_argument_group("least squares (lse)")
+    lse.add_argument("--order", type=int, choices=(0, 1), default=1,
+                     help="Sugeno output terms: 1 linear, 0 constant (default %(default)s)")
+    lse.add_argument("--monotone", nargs="+", default=[], metavar="INPUT:+|-",
+                     help="inputs along which the output must not decrease (+) or increase (-), e.g. iou:-")
+    lse.add_argument("--grid", type=int, default=51,
+                     help="grid points per input for the monotone constraints (default %(default)s)")
+    lse.add_argument("--unbounded", action="store_true",
+                     help="let the rules' terms leave the output's range (default: kept inside it)")
 
 
 def recorded_path(path: str) -> str:
@@ -86,6 +99,13 @@ def _command(args: argparse.Namespace) -> str:
              f"--rules {recorded_path(args.rules)}", f"-o {recorded_path(args.output)}"]
     if args.test:
         parts.append(f"--test {recorded_path(args.test)}")
+    if args.method == "lse":
+        parts.append(f"--order {args.order}")
+        if args.monotone:
+            parts += ["--monotone " + " ".join(args.monotone), f"--grid {args.grid}"]
+        if args.unbounded:
+            parts.append("--unbounded")
+        return " ".join(parts)
     parts += [f"--seed {args.seed}", f"--metric {args.metric}"]
     if args.method != "pso":
         parts += [f"--folds {args.folds}", f"--max-iter {args.max_iter}"]
@@ -100,6 +120,17 @@ def _command(args: argparse.Namespace) -> str:
         if args.allow_off:
             parts.append("--allow-off")
     return " ".join(parts)
+
+
+def _monotone(specs: list[str]) -> dict[str, int]:
+    """``["iou:-"]`` -> ``{"iou": -1}``; an input named twice is refused."""
+    monotone = {}
+    for spec in specs:
+        name, direction = parse_monotone(spec)
+        if name in monotone:
+            raise ValueError(f"--monotone names {name!r} twice")
+        monotone[name] = direction
+    return monotone
 
 
 def _sha256(path: str) -> str:
@@ -120,6 +151,11 @@ def _describe(table) -> str:
 
 def run(args: argparse.Namespace) -> int:
     read = [args.rules, args.features] + ([args.test] if args.test else [])
+    monotone = _monotone(args.monotone)
+    if args.method != "lse" and (monotone or args.unbounded):
+        raise ValueError("--monotone and --unbounded are options of --method lse")
+    if args.method == "lse" and args.metric != "rmse":
+        raise ValueError(f"--metric {args.metric}: least squares (--method lse) minimises the RMSE")
     check_save_path(args.output, read, overwrite=args.overwrite, overwrite_hint="--overwrite")
     system = fuzzcore.load(args.rules)
     train = read_csv(args.features, system.input_names, args.target, args.group)
@@ -127,7 +163,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"training data {args.features}: {_describe(train)}")
     if test is not None:
         print(f"test data {args.test}: {_describe(test)}")
-    if train.groups is None and args.method != "pso" and args.folds > 1:
+    if train.groups is None and args.method in ("patternsearch", "joint") and args.folds > 1:
         print(f"note: {args.features} has no {args.group!r} column, so the {args.folds} folds split frames at "
               "random: frames of one scene can land in different folds (an optimistic cross-validation)")
 
@@ -149,6 +185,9 @@ def run(args: argparse.Namespace) -> int:
         tuner = PatternSearch(system, **ps_options, **common)
     elif args.method == "pso":
         tuner = ParticleSwarm(system, **pso_options, **common)
+    elif args.method == "lse":
+        tuner = LeastSquares(system, order=args.order, bounded=not args.unbounded, monotone=monotone,
+                             grid=args.grid, callback=progress)
     else:
         tuner = JointTuner(system, pattern_search=ps_options, particle_swarm=pso_options, **common)
     started = time.perf_counter()
@@ -180,6 +219,6 @@ def run(args: argparse.Namespace) -> int:
     if test is not None:
         print(f"  test {args.metric}: {initial_test:.5f} (start) -> {final_test:.5f} (tuned)")
     print(f"written to {args.output}")
-    print(f"\nfuzzrisk check {args.output}:")
-    print(fuzzcore.verify(tuned))
+    print(f"\nfuzzrisk check {args.output}{''.join(' --monotone ' + m for m in args.monotone)}:")
+    print(fuzzcore.verify(tuned, monotone))
     return 0

@@ -81,3 +81,38 @@ def test_tune_command_reports_user_errors(tables, tmp_path, capsys):
                      "-o", str(tmp_path / "o.yaml"), "--folds", "20"])
     assert code == 2
     assert "n_folds = 20 but the data have only 8 groups" in capsys.readouterr().err
+
+
+def test_tune_lse_writes_a_monotone_sugeno_system_with_its_provenance(tables, tmp_path, capsys):
+    train, test = tables
+    out = tmp_path / "lse.yaml"
+    code = cli.main(["tune", "--features", str(train), "--method", "lse", "--rules", RULES, "-o", str(out),
+                     "--test", str(test), "--monotone", "iou:-", "--grid", "21"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    tuned = fuzzcore.load(out)
+    tuning = tuned.metadata["tuning"]
+    assert tuned.type == "sugeno" and tuning["method"] == "lse" and tuning["seed"] is None
+    assert tuning["settings"]["monotone"] == {"iou": -1} and tuning["settings"]["grid"] == 21
+    assert tuning["command"] == (f"fuzzrisk tune --features {train.name} --method lse --rules {RULES} -o {out.name} "
+                                 f"--test {test.name} --order 1 --monotone iou:- --grid 21")
+    assert f"fuzzrisk check {out} --monotone iou:-:" in printed
+    assert "risk decreasing in iou: holds" in printed and "result: PASS" in printed
+    rows = list(csv.DictReader(open(test)))
+    X = np.array([[float(r["iou"]), float(r["rdd"])] for r in rows])
+    y = np.array([float(r["target"]) for r in rows])
+    assert tuning["test"]["final"] == pytest.approx(np.sqrt(np.mean((tuned.evaluate(X)[:, 0] - y) ** 2)), rel=1e-12)
+    assert tuning["score"]["final"] < tuning["score"]["initial"]
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--method", "pso", "--monotone", "iou:-"], "--monotone and --unbounded are options of --method lse"),
+    (["--method", "lse", "--metric", "mae"], "--metric mae: least squares (--method lse) minimises the RMSE"),
+    (["--method", "lse", "--monotone", "iou:-", "iou:+"], "--monotone names 'iou' twice"),
+    (["--method", "lse", "--monotone", "iou"], "monotone property 'iou': expected INPUT:+ or INPUT:-"),
+])
+def test_tune_lse_options_are_checked_before_any_work(tables, tmp_path, capsys, extra, words):
+    train, _ = tables
+    out = tmp_path / "o.yaml"
+    code = cli.main(["tune", "--features", str(train), "--rules", RULES, "-o", str(out), *extra])
+    assert code == 2 and words in capsys.readouterr().err and not out.exists()
