@@ -161,11 +161,13 @@ class LeastSquares(Tuner):
                       for n in (self.system.input_names + ("const",) if self.order == 1 else ("const",))]
         by_name = {self.system.input_names[i]: d for i, d in monotone.items()}
         nit, solved, added = 0, 0, 0
+        params = [None] * len(fits)
         for _ in range(MAX_REFINEMENTS + 1):
-            params, statuses = [], []
-            for o, (rules, A, fired, M) in enumerate(fits):
-                p, status, it = self._solve(A, Y[:, o], self.system.outputs[o].range, fired, width, M, o, reporter)
-                params.append(p)
+            statuses = []
+            for o, (rules, A, fired, M) in enumerate(fits):  # each round starts from the last one's fit
+                p, status, it = self._solve(A, Y[:, o], self.system.outputs[o].range, fired, width, M, o, reporter,
+                                            params[o])
+                params[o] = p
                 statuses.append(status)
                 nit += it
                 solved += 1
@@ -250,10 +252,11 @@ class LeastSquares(Tuner):
         return M[np.any(M != 0.0, axis=1)]  # pairs no parameter moves
 
     # ------------------------------------------------------------------ the programme
-    def _solve(self, A, y, out_range, fired, width, M, o, reporter):
+    def _solve(self, A, y, out_range, fired, width, M, o, reporter, start=None):
         """Minimise the squared error of ``A p`` to ``y`` subject to ``M p <= 0`` and, if
-        ``bounded``, the range; the parameters of the rules that never ``fired`` stay at the
-        middle of the range. Returns ``p`` (n_rules * width,), the status and the iterations."""
+        ``bounded``, the range, from ``start`` (default: every term the middle of the range);
+        the parameters of the rules that never ``fired`` stay at the middle of the range.
+        Returns ``p`` (n_rules * width,), the status and the iterations."""
         lo_out, hi_out = out_range
         mid = 0.5 * (lo_out + hi_out)
         n_rules = fired.shape[0]
@@ -304,7 +307,11 @@ class LeastSquares(Tuner):
                 best["stopped"] = True
                 raise StopIteration
 
-        solution = minimize(lambda z: 0.5 * z @ H @ z - g @ z, z0[keep], jac=lambda z: H @ z - g, method="SLSQP",
+        first = z0.copy()
+        if start is not None:
+            first[:n_p] = start
+            first[slopes], first[n_p:] = np.maximum(start[slopes], 0.0), np.maximum(-start[slopes], 0.0)
+        solution = minimize(lambda z: 0.5 * z @ H @ z - g @ z, first[keep], jac=lambda z: H @ z - g, method="SLSQP",
                             bounds=[(b, None) for b in lower],
                             constraints=[{"type": "ineq", "fun": lambda z: h_free - G_free @ z,
                                           "jac": lambda z: -G_free}],
