@@ -29,7 +29,7 @@ from .rules import RuleFindings, check_rules
 from .surface import Monotonicity, Steepest, monotonicity, sample_lines, steepest
 
 __all__ = ["Coverage", "Monotonicity", "OutputRange", "Partition", "Region", "Report", "RuleFindings", "Steepest",
-           "parse_monotone", "verify"]
+           "parse_monotone", "parse_monotone_specs", "verify"]
 
 DIRECTIONS = {"+": 1, "-": -1, "+1": 1, "-1": -1, "up": 1, "down": -1}
 
@@ -40,6 +40,18 @@ def parse_monotone(spec: str) -> tuple[str, int]:
     if not sep or not name or direction not in DIRECTIONS:
         raise ValueError(f"monotone property {spec!r}: expected INPUT:+ or INPUT:- (e.g. rdd:+)")
     return name, DIRECTIONS[direction]
+
+
+def parse_monotone_specs(specs) -> dict[str, int]:
+    """``["iou:-", "rdd:+"]`` -> ``{"iou": -1, "rdd": 1}`` (the command line's ``--monotone``);
+    an input named twice is refused."""
+    monotone = {}
+    for spec in specs:
+        name, direction = parse_monotone(spec)
+        if name in monotone:
+            raise ValueError(f"--monotone names {name!r} twice")
+        monotone[name] = direction
+    return monotone
 
 
 def _check_count(name: str, value, low: int) -> int:

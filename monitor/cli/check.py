@@ -14,7 +14,7 @@ import argparse
 import json
 
 import fuzzcore
-from fuzzcore.verification import parse_monotone
+from fuzzcore.verification import parse_monotone_specs
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,12 +30,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     fis = fuzzcore.load(args.rules)
-    monotone = {}
-    for spec in args.monotone:
-        name, direction = parse_monotone(spec)
-        if name in monotone:
-            raise ValueError(f"--monotone names {name!r} twice")
-        monotone[name] = direction
+    monotone = parse_monotone_specs(args.monotone)
     report = fuzzcore.verify(fis, monotone, threshold=args.threshold, seed=args.seed)
     if args.json:
         print(json.dumps(report.to_dict(), indent=2, allow_nan=False))

@@ -19,7 +19,7 @@ import numpy as np
 
 import fuzzcore
 from fuzzcore.outputs import check_output
-from fuzzcore.verification import parse_monotone
+from fuzzcore.verification import parse_monotone_specs
 from monitor.userfiles import save_figure
 
 
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     if args.resolution < 2:
         raise ValueError(f"--resolution {args.resolution}: expected an integer >= 2")
     fis = fuzzcore.load(args.rules)
-    monotone = dict(parse_monotone(spec) for spec in args.monotone)
+    monotone = parse_monotone_specs(args.monotone)
     report = fuzzcore.verify(fis, monotone)
     fig = _draw(fis, report, monotone, args.resolution)
     save_figure(fig, output, 110)

@@ -40,7 +40,7 @@ from tqdm import tqdm
 import fuzzcore
 from fuzzcore.io import check_save_path
 from fuzzcore.tune import JointTuner, LeastSquares, ParticleSwarm, PatternSearch, read_csv
-from fuzzcore.verification import parse_monotone
+from fuzzcore.verification import parse_monotone_specs
 
 METHODS = ("patternsearch", "pso", "joint", "lse")
 
@@ -122,17 +122,6 @@ def _command(args: argparse.Namespace) -> str:
     return " ".join(parts)
 
 
-def _monotone(specs: list[str]) -> dict[str, int]:
-    """``["iou:-"]`` -> ``{"iou": -1}``; an input named twice is refused."""
-    monotone = {}
-    for spec in specs:
-        name, direction = parse_monotone(spec)
-        if name in monotone:
-            raise ValueError(f"--monotone names {name!r} twice")
-        monotone[name] = direction
-    return monotone
-
-
 def _sha256(path: str) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -151,7 +140,7 @@ def _describe(table) -> str:
 
 def run(args: argparse.Namespace) -> int:
     read = [args.rules, args.features] + ([args.test] if args.test else [])
-    monotone = _monotone(args.monotone)
+    monotone = parse_monotone_specs(args.monotone)
     if args.method != "lse" and (monotone or args.unbounded):
         raise ValueError("--monotone and --unbounded are options of --method lse")
     if args.method == "lse" and args.metric != "rmse":
@@ -219,6 +208,6 @@ def run(args: argparse.Namespace) -> int:
     if test is not None:
         print(f"  test {args.metric}: {initial_test:.5f} (start) -> {final_test:.5f} (tuned)")
     print(f"written to {args.output}")
-    print(f"\nfuzzrisk check {args.output}{''.join(' --monotone ' + m for m in args.monotone)}:")
+    print(f"\nfuzzrisk check {args.output}{' --monotone ' + ' '.join(args.monotone) if args.monotone else ''}:")
     print(fuzzcore.verify(tuned, monotone))
     return 0
