@@ -145,7 +145,7 @@ class LeastSquares(Tuner):
         X, Y, _ = check_data(self.system, X, y, groups)
         initial_fun = float(np.sqrt(np.mean((self.system.evaluate(X) - Y) ** 2)))
         reporter = Reporter(self.method, self.callback, [])
-        width = len(self.system.inputs) + 1 if self.order == 1 else 1
+        width = self._width
         names, notes, fits = [], [], []
         for o, var in enumerate(self.system.outputs):  # the data's regressors and the grid's constraints
             rules = [r for r, rule in enumerate(self.system.rules) if rule.consequent[o] != 0]
@@ -203,6 +203,11 @@ class LeastSquares(Tuner):
 
     # ------------------------------------------------------------------ the linear model
     @property
+    def _width(self) -> int:
+        """Parameters per rule: ``a_1 .. a_n, c`` (order 1) or ``c`` (order 0)."""
+        return len(self.system.inputs) + 1 if self.order == 1 else 1
+
+    @property
     def _defuzzifier(self) -> str:
         return self.system.defuzzifier if self.system.type == "sugeno" else "wtaver"
 
@@ -231,7 +236,7 @@ class LeastSquares(Tuner):
         ``-direction`` times the regressors' change between neighbours along each monotone
         input. The grid has ``grid`` points per input and every breakpoint of the inputs'
         terms inside the range."""
-        width = len(self.system.inputs) + 1 if self.order == 1 else 1
+        width = self._width
         if not monotone:
             return np.zeros((0, len(rules) * width))
         axes = []
@@ -328,7 +333,7 @@ class LeastSquares(Tuner):
     # ------------------------------------------------------------------ the result
     def _system(self, params: list[np.ndarray]) -> FuzzySystem:
         """The fitted Sugeno system: the starting inputs and antecedents, one term per rule."""
-        width = len(self.system.inputs) + 1 if self.order == 1 else 1
+        width = self._width
         kind = "linear" if self.order == 1 else "constant"
         outputs, consequents = [], [[0] * len(self.system.outputs) for _ in self.system.rules]
         for o, var in enumerate(self.system.outputs):
