@@ -200,7 +200,8 @@ def run(args: argparse.Namespace) -> int:
     tuned.save(args.output)
 
     print(f"{args.method}: {result.message}")
-    print(f"  {result.nit} iterations, {result.nfev} candidate systems scored, {seconds:.1f} s")
+    scored = "quadratic programmes solved" if args.method == "lse" else "candidate systems scored"
+    print(f"  {result.nit} iterations, {result.nfev} {scored}, {seconds:.1f} s")
     print(f"  training {args.metric}: {result.initial_fun:.5f} (start) -> {result.fun:.5f} (tuned)")
     if len(result.cv_scores):
         print(f"  cross-validation {args.metric} per fold: "
