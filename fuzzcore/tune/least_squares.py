@@ -267,9 +267,9 @@ class LeastSquares(Tuner):
         mid = 0.5 * (lo_out + hi_out)
         n_rules = fired.shape[0]
         free = np.repeat(fired, width)
-        p = np.zeros(n_rules * width)
-        p[width - 1::width] = mid  # the constants (MATLAB's order: a_1 .. a_n, c)
         if not self.bounded and M.shape[0] == 0:
+            p = np.zeros(n_rules * width)
+            p[width - 1::width] = mid  # the constants (MATLAB's order: a_1 .. a_n, c) of idle rules
             p[free] = np.linalg.lstsq(A[:, free], y, rcond=None)[0]
             stopped = reporter.iteration(p, np.sqrt(np.mean((A @ p - y) ** 2)))
             return p, CALLBACK_STOP if stopped else CONVERGED, 1
