@@ -172,7 +172,7 @@ class LeastSquares(Tuner):
                 statuses.append(status)
                 nit += it
                 solved += 1
-            fitted = self._system(params)
+            fitted = self._system(params, [fit[0] for fit in fits])
             if not monotone or CALLBACK_STOP in statuses:
                 break
             broken = [m for m in verify(fitted, by_name).monotonicity if not m.holds]
@@ -332,13 +332,13 @@ class LeastSquares(Tuner):
         return S @ z, status, int(solution.nit)
 
     # ------------------------------------------------------------------ the result
-    def _system(self, params: list[np.ndarray]) -> FuzzySystem:
-        """The fitted Sugeno system: the starting inputs and antecedents, one term per rule."""
+    def _system(self, params: list[np.ndarray], rules_of: list[list[int]]) -> FuzzySystem:
+        """The fitted Sugeno system: the starting inputs and antecedents, one term per rule
+        (``rules_of[o]``: the rules setting output ``o``, in ``params[o]``'s order)."""
         width = self._width
         kind = "linear" if self.order == 1 else "constant"
         outputs, consequents = [], [[0] * len(self.system.outputs) for _ in self.system.rules]
-        for o, var in enumerate(self.system.outputs):
-            rules = [r for r, rule in enumerate(self.system.rules) if rule.consequent[o] != 0]
+        for o, (var, rules) in enumerate(zip(self.system.outputs, rules_of)):
             terms = []
             for i, r in enumerate(rules):
                 terms.append(Term(f"rule{r + 1}", kind, tuple(float(v) for v in params[o][i * width:(i + 1) * width])))
