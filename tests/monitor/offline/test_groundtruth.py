@@ -1,9 +1,12 @@
 """Tests for monitor.offline.groundtruth: USC~ per frame and the target 1 - USC~."""
+import itertools
 import math
 
 import numpy as np
 import pytest
 
+from monitor.alignment import assign_by_centre
+from monitor.geometry.boxes import usc
 from monitor.offline.groundtruth import NO_TARGETS, OK, score
 
 EMPTY = np.empty((0, 5))
@@ -37,7 +40,7 @@ def test_range_limit_is_configurable_and_inclusive():
     assert r.usc_mean == pytest.approx(1.1 / 4)
     r = score(P, G, max_range=9.0)  # only G1 (8 m)
     np.testing.assert_array_equal(r.g_index, [1])
-    # G1 alone: the closest P is P1 (centre distance 0): USC 0.5
+    # G1 alone: P1 covers it best (P0 does not overlap it): USC 0.5
     np.testing.assert_array_equal(r.partner, [1])
     assert r.target == pytest.approx(0.5)
 
@@ -54,14 +57,52 @@ def test_no_predictions_is_full_risk():
     assert r.usc_mean == 0.0 and r.target == 1.0 and r.status == OK
 
 
-def test_pairing_is_hungarian_on_centre_distance():
-    # G at x = 0 and 10, P at 6 and 20: greedy would give G1-P0, the optimum G0-P0, G1-P1
-    g = np.array([[0, 0, 8, 8, 5.0], [10, 0, 8, 8, 5.0]])
-    p = np.array([[6, 0, 8, 8, 5.0], [20, 0, 8, 8, 5.0]])
+def test_pairing_maximises_usc_where_centre_distance_would_not():
+    # G0 at x = 0 with P0 lying on it, G1 at x = 100 that nothing covers, P1 at x = -60.
+    # On centre distance G0-P1 + G1-P0 = 60 + 99 = 159 beats G0-P0 + G1-P1 = 1 + 160 = 161,
+    # which scores G0 as missed although P0 covers it.
+    g = np.array([[0, 0, 10, 10, 5.0], [100, 0, 10, 10, 5.0]])
+    p = np.array([[1, 0, 10, 10, 5.0], [-60, 0, 10, 10, 5.0]])
+    np.testing.assert_array_equal(assign_by_centre(g, p), [1, 0])
     r = score(p, g)
-    np.testing.assert_array_equal(r.partner, [0, 1])
-    # G0 x [-4, 4] & P0 x [2, 10] -> 2 * 8 = 16 of 64; G1 x [6, 14] & P1 x [16, 24] -> 0
-    np.testing.assert_allclose(r.usc, [0.25, 0.0])
+    np.testing.assert_array_equal(r.partner, [0, -1])  # G1: no P covers it
+    # G0 x [-5, 5] & P0 x [-4, 6] -> 9 * 10 = 90 of 100; DR 1
+    np.testing.assert_allclose(r.usc, [0.9, 0.0])
+    assert r.target == pytest.approx(1 - 0.45)
+
+
+def test_pairing_is_one_to_one():
+    # two G side by side under one wide P: it covers one of them, not both
+    g = np.array([[0, 0, 10, 10, 5.0], [10, 0, 10, 10, 5.0]])
+    p = np.array([[5, 0, 20, 10, 5.0]])
+    r = score(p, g)
+    assert sorted(r.partner.tolist()) == [-1, 0]
+    np.testing.assert_allclose(sorted(r.usc), [0.0, 1.0])
+
+
+def _best_total_usc(p, g) -> float:
+    """The largest summed USC of any one-to-one pairing, by trying every one."""
+    best = 0.0
+    k = min(len(p), len(g))
+    for rows in itertools.permutations(range(len(g)), k):
+        for cols in itertools.permutations(range(len(p)), k):
+            best = max(best, sum(usc(p[j], g[i]) for i, j in zip(rows, cols)))
+    return best
+
+
+def test_summed_usc_is_the_best_of_every_pairing():
+    rng = np.random.default_rng(3)
+    for _ in range(40):
+        n, m = rng.integers(0, 5, size=2)
+        g = np.column_stack([rng.uniform(0, 100, m), rng.uniform(0, 50, m),
+                             rng.uniform(5, 60, (m, 2)), rng.uniform(1, 19, m)])
+        p = np.column_stack([rng.uniform(0, 100, n), rng.uniform(0, 50, n),
+                             rng.uniform(5, 60, (n, 2)), rng.uniform(1, 30, n)])
+        r = score(p, g)
+        assert r.usc.sum() == pytest.approx(_best_total_usc(p, g), abs=1e-12)
+        paired = r.partner >= 0
+        assert len(set(r.partner[paired].tolist())) == int(paired.sum())  # each P once
+        np.testing.assert_allclose(r.usc[paired], usc(p[r.partner[paired]], g[paired]))
 
 
 @pytest.mark.parametrize("p, g, kwargs, message", [
