@@ -13,10 +13,10 @@ scores low through IoG and DR.
 
 An assignment on box-centre distance instead (the paper's pairing of S and P) minimises the
 summed distance over every G, the uncovered ones too, so a G that no prediction covers can
-take a well-placed prediction from the G it lies on when that shortens the sum: in the
-synthetic benchmark's held-out frames 9 % of the ground truths scored more than 0.1 below
-what this pairing gives them, among them ground truths with a detection lying exactly on
-them that scored 0 (README, results).
+take a well-placed prediction from the G it lies on when that shortens the sum. In the
+held-out frames of ``fuzzrisk eval``'s default benchmark it scored 227 of the 6,265 ground
+truths (3.6 %) 0 that a detection covers with a USC above 0.8, and 9 % of them moved by
+more than 0.1 (README, results).
 
 A frame without any G within range has no target: status :data:`NO_TARGETS` and NaN
 ``usc_mean`` / ``target``, never a risk of 0.
