@@ -83,7 +83,8 @@ class LeastSquares(Tuner):
     grid : int >= 2
         Grid points per input for the monotone constraints.
     max_iter : int >= 1
-        SLSQP iterations at most.
+        SLSQP iterations at most, per programme solved (its tolerance is 1e-15: the shipped
+        file's programmes, about 50 unknowns each, took up to about 1,400).
     callback : callable, optional
         Called after each SLSQP iteration (:mod:`fuzzcore.tune.base`).
 
@@ -106,7 +107,7 @@ class LeastSquares(Tuner):
     seed = None  # nothing random
 
     def __init__(self, system: FuzzySystem, order: int = 1, bounded: bool = True, monotone=None,
-                 grid: int = 51, max_iter: int = 1000, callback=None):
+                 grid: int = 51, max_iter: int = 10_000, callback=None):
         self.system = system
         self.order = order
         self.bounded = bounded

@@ -157,7 +157,7 @@ def test_saved_system_loads_back_with_its_provenance(fis, data, tmp_path):
     np.testing.assert_array_equal(back.evaluate(X), tuner.system_.evaluate(X))
     tuning = back.metadata["tuning"]
     assert tuning["method"] == "lse" and tuning["seed"] is None and tuning["metric"] == "rmse"
-    assert tuning["settings"] == {"order": 1, "bounded": True, "monotone": {"iou": -1}, "grid": 21, "max_iter": 1000}
+    assert tuning["settings"] == {"order": 1, "bounded": True, "monotone": {"iou": -1}, "grid": 21, "max_iter": 10_000}
     assert tuning["score"]["final"] == pytest.approx(np.sqrt(np.mean((back.evaluate(X)[:, 0] - y) ** 2)))
 
 
