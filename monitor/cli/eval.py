@@ -10,7 +10,11 @@ training scenes' mean target):
   detection covers: IoG > --hazard-iog and DR > --hazard-dr), hit and false-alarm rates at
   the shield threshold, FPR at 95 % TPR;
 - the depth view's recall and precision of the ground truth within range, the share of
-  frames per status; a figure (``quality.png``): ROC curves and risk against target.
+  frames per status; a figure (``quality.png``): ROC curves and risk against target;
+- how sure those are (:mod:`monitor.offline.bootstrap`): each rule base's r, skill, AUROC,
+  hit and false-alarm rates with 95 % intervals from ``--bootstrap`` resamples of the
+  held-out scenes, and its differences in r, RMSE and AUROC from the monitor's own rule
+  base, paired on the same resamples.
 
 Below them, the paper's tables:
 
@@ -38,6 +42,7 @@ import fuzzcore
 from fuzzcore.outputs import check_output_folder, write_text
 from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
+from monitor.offline.bootstrap import bootstrap_tables, interval_cell
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
                                 recall_table, rmse_table)
 from monitor.offline.measures import (HazardCriterion, frame_rows, frame_truth, quality_tables,
@@ -57,6 +62,17 @@ DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gt
               ("ok", "ok", "{:.0%}"), ("no-objects", "no-objects", "{:.0%}"),
               ("invalid-input", "invalid", "{:.0%}"), ("no-view", "no-view", "{:.0%}"),
               ("no-rule-fired", "no rule", "{:.0%}")]
+
+#: the bootstrap's measures as the report shows them: (row key, header, format of a value)
+INTERVAL_COLUMNS = (("pearson", "r", "{:.2f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
+                    ("hit_rate", "hit", "{:.0%}"), ("false_alarm_rate", "false al.", "{:.0%}"))
+PAIRED_COLUMNS = (("pearson", "r", "{:+.3f}"), ("rmse", "RMSE", "{:+.3f}"), ("auroc", "AUROC", "{:+.3f}"))
+INTERVALS = [("condition", "condition", "{}"), ("predictor", "predictor", "{}")] + \
+    [(key, header, "{}") for key, header, _ in INTERVAL_COLUMNS]
+PAIRED = [("condition", "condition", "{}"), ("predictor", "predictor", "{}")] + \
+    [(key, f"{header} difference", "{}") for key, header, _ in PAIRED_COLUMNS]
+#: seed of the scene bootstrap (the report says it)
+BOOTSTRAP_SEED = 0
 
 #: the files the command writes in its output folder (checked before the work starts)
 OUTPUTS = ("report.md", "tables.json", "quality.png", "frames.jsonl")
@@ -80,6 +96,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="a detection covers a ground truth when IoG > this (default %(default)s)")
     parser.add_argument("--hazard-dr", type=float, default=0.8,
                         help="... and DR = min(1, d_G / d_P) > this (default %(default)s)")
+    parser.add_argument("--bootstrap", type=int, default=2000,
+                        help="resamples of the held-out scenes for the measures' 95 %% intervals "
+                             "(default %(default)s; 0: none)")
     add_scene_arguments(parser, default_scenes=6, default_test=2)
     add_parallel_arguments(parser)
 
@@ -101,7 +120,33 @@ def _undefined(rows: list[dict]) -> str:
     return "\n".join(["Undefined measures ('-'):"] + lines) if lines else "Every measure is defined."
 
 
+def _uncertainty_sections(quality: list[dict], intervals: list[dict], paired: list[dict], draws: int,
+                          against: str) -> list[tuple]:
+    """The report's sections of the bootstrap (none without one): its rows as cells
+    ``value [lo, hi]``, the value measured on the frames themselves."""
+    if not intervals:
+        return []
+    point = {(row["condition"], row["predictor"]): row for row in quality}
+    shown = [{"condition": row["condition"], "predictor": row["predictor"], "notes": row["notes"],
+              **{key: interval_cell(point[(row["condition"], row["predictor"])][key], row[f"{key}_lo"],
+                                    row[f"{key}_hi"], fmt) for key, _, fmt in INTERVAL_COLUMNS}}
+             for row in intervals]
+    differences = [{"condition": row["condition"], "predictor": row["predictor"], "notes": row["notes"],
+                    **{key: interval_cell(row[f"{key}_diff"], row[f"{key}_diff_lo"], row[f"{key}_diff_hi"], fmt)
+                       for key, _, fmt in PAIRED_COLUMNS}}
+                   for row in paired]
+    how = (f"{draws} resamples of the held-out scenes, whole scenes drawn with replacement within each "
+           f"condition, seed {BOOTSTRAP_SEED}")
+    sections = [(f"How sure: 95 % intervals of the measures ({how})", shown, INTERVALS)]
+    if differences:
+        sections.append((f"Against the monitor's rule base {against}: differences, paired on the same "
+                         f"resamples (95 % intervals; RMSE below 0 is better)", differences, PAIRED))
+    return sections
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.bootstrap < 0:
+        raise ValueError(f"--bootstrap {args.bootstrap}: must be >= 0 (0: no intervals)")
     out = check_output_folder(args.out, OUTPUTS, args.overwrite)
     try:
         criterion = HazardCriterion(min_iog=args.hazard_iog, min_dr=args.hazard_dr)
@@ -128,6 +173,11 @@ def run(args: argparse.Namespace) -> int:
     quality, depth_view, risks = quality_tables(test, test_truth, systems, reference, threshold,
                                                 config.risk.fail_safe)
     shipped = shipped_rules().name if shipped_rules().name in risks else next(iter(systems))
+    intervals, paired = [], []
+    if args.bootstrap:
+        intervals, paired = bootstrap_tables(test_truth, [ob.scene for ob in test],
+                                             {name: risks[name] for name in systems}, reference, threshold,
+                                             shipped, draws=args.bootstrap, seed=BOOTSTRAP_SEED)
     by_condition = _by_condition(test)
     figure = save_quality_figure(
         out / "quality.png", {c: risks[shipped][[ob.condition == c for ob in test]] for c in by_condition},
@@ -144,6 +194,7 @@ def run(args: argparse.Namespace) -> int:
         "recall": [{"condition": c, "setting": f"({a}, {b})", **recall_table(obs, a, b)}
                    for c, obs in groups.items() for a, b in PAPER_THRESHOLDS],
         "analysis": [], "rmse": rmse_table(test, systems),
+        "intervals": intervals, "paired": paired,
     }
     for condition, obs in groups.items():
         counts = detection_analysis(obs, config.alignment.alpha, config.alignment.beta)
@@ -156,6 +207,7 @@ def run(args: argparse.Namespace) -> int:
         (f"Quality of the risk on the {len(test_names)} held-out test scenes (hazard: a ground truth within "
          f"{config.max_range:g} m no detection covers with IoG > {criterion.min_iog} and DR > {criterion.min_dr}; "
          f"alarm: risk > {threshold}; constant: {reference_note})", quality, QUALITY),
+        *_uncertainty_sections(quality, intervals, paired, args.bootstrap, shipped),
         (f"The depth view on the held-out test scenes: recall and precision of the ground truth within range "
          f"(IoG > {criterion.min_iog} resp. intersection over S > {criterion.min_iog}, depth ratio min / max > "
          f"{criterion.min_dr}), share of frames per status", depth_view, DEPTH_VIEW),
@@ -170,7 +222,7 @@ def run(args: argparse.Namespace) -> int:
     for title, rows, columns in sections:
         print(f"\n{title}\n{format_table(rows, columns)}")
         lines += [f"## {title}", "", format_table(rows, columns, markdown=True), ""]
-        if columns is QUALITY:
+        if columns is QUALITY or columns is INTERVALS or columns is PAIRED:
             notes = _undefined(rows)
             print(notes)
             lines += [notes, ""]

@@ -58,6 +58,21 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
         scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
         err = np.array([r - t for r, t in scored])
         assert len(scored) > 0 and row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
+    # one held-out scene: every resample of the bootstrap is that scene, so each interval is the
+    # measure itself, and each paired difference the difference of the measures
+    assert "How sure: 95 % intervals" in report and "Against the monitor's rule base fuzzrisk.yaml" in report
+    quality = {(r["condition"], r["predictor"]): r for r in tables["quality"]}
+    assert {(r["condition"], r["predictor"]) for r in tables["intervals"]} == \
+        {(c, name) for c in ("nominal", "all") for name in shipped}
+    for row in tables["intervals"]:
+        for m in ("pearson", "skill", "hit_rate"):
+            value = pytest.approx(quality[(row["condition"], row["predictor"])][m], rel=1e-12, nan_ok=True)
+            assert row[f"{m}_lo"] == value and row[f"{m}_hi"] == value  # r: NaN, 2 frames
+    for row in tables["paired"]:
+        mine, theirs = quality[(row["condition"], row["predictor"])], quality[(row["condition"], "fuzzrisk.yaml")]
+        assert row["rmse_diff"] == row["rmse_diff_lo"] == row["rmse_diff_hi"]
+        assert row["rmse_diff"] == pytest.approx(mine["rmse"] - theirs["rmse"], rel=1e-12)
+
     fis = fuzzcore.load("rules/fuzzrisk.yaml")
     for f in frames:
         if f["status"] == "ok":
@@ -76,6 +91,16 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
     if rows:
         assert row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
         assert row["mae"] == pytest.approx(float(np.mean(np.abs(err))), rel=1e-12)
+
+
+def test_eval_without_a_bootstrap_has_no_intervals(tmp_path, capsys):
+    out = tmp_path / "eval"
+    assert main(["eval", "-o", str(out), "--bootstrap", "0", *SMALL]) == 0
+    tables = json.loads((out / "tables.json").read_text())
+    assert tables["intervals"] == [] and tables["paired"] == []
+    assert "How sure" not in (out / "report.md").read_text()
+    assert main(["eval", "-o", str(tmp_path / "e2"), "--bootstrap", "-1", *SMALL]) == 2
+    assert "--bootstrap -1: must be >= 0 (0: no intervals)" in capsys.readouterr().err
 
 
 def test_eval_refuses_an_empty_rules_folder(tmp_path, capsys):
