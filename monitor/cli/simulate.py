@@ -193,13 +193,19 @@ def _clean(value):
         return None
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, list):
+    if isinstance(value, (list, tuple)):
         return [_clean(v) for v in value]
     return value
 
 
 def _pct(value) -> str:
     return "-" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{100 * value:.0f}%"
+
+
+def _interval(bounds) -> str:
+    """`` [lo, hi]`` of a rate's 95 % interval in per cent, "" when it is undefined."""
+    lo, hi = (float("nan"), float("nan")) if bounds is None else bounds
+    return "" if any(v is None or math.isnan(v) for v in (lo, hi)) else f" [{100 * lo:.0f}%, {100 * hi:.0f}%]"
 
 
 def _num(value, fmt="{:.1f}") -> str:
@@ -213,7 +219,8 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
     if note:
         lines += ["# Closed-loop simulation", "", note, ""]
     lines += [f"`{summary['command']}`", "",
-              f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s).", "",
+              f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s). "
+              "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time).", "",
               "## Hazards (baseline collisions avoided by the shield)", "",
               "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
               "avoidable, detector missed: avoided | unavoidable | impact v (shield) | shield-only | rear-ended |",
@@ -225,8 +232,10 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
         for condition, m in list(by_condition.items()) + [("all", summary["by_kind"][kind])]:
             rows.append(f"| {kind} | {condition} | {m['runs']} | {_pct(m['baseline_collision_rate'])} | "
                         f"{_pct(m['shielded_collision_rate'])} | {_pct(m['avoidance_rate'])} | "
-                        f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']} | "
-                        f"{_pct(m['avoidance_rate_avoidable_missed'])} of {m['avoidable_missed_collisions']} | "
+                        f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']}"
+                        f"{_interval(m['avoidance_rate_avoidable_interval'])} | "
+                        f"{_pct(m['avoidance_rate_avoidable_missed'])} of {m['avoidable_missed_collisions']}"
+                        f"{_interval(m['avoidance_rate_avoidable_missed_interval'])} | "
                         f"{m['unavoidable_collisions']} ({_pct(m['avoidance_rate_unavoidable'])} avoided) | "
                         f"{_num(m['impact_speed_shielded'])} m/s | {m['shield_only_collisions']} | "
                         f"{m['rear_ended_shielded']} |")
@@ -237,9 +246,11 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
                   "added trip time | not arrived |", "|---|---|---|---|---|---|---|---|"]
         by_condition = summary["by_kind_condition"]["hazard-free"]
         for condition, m in list(by_condition.items()) + [("all", summary["by_kind"]["hazard-free"])]:
-            lines.append(f"| {condition} | {m['runs']} | {_pct(m['false_brake_rate'])} | "
+            lines.append(f"| {condition} | {m['runs']} | {_pct(m['false_brake_rate'])}"
+                         f"{_interval(m['false_brake_rate_interval'])} | "
                          f"{_pct(m['baseline_brake_rate'])} | {_pct(m['braking_share'])} | "
-                         f"{_pct(m['engaged_share'])} | {_pct(m['added_trip_time'])} | {m['not_arrived']} |")
+                         f"{_pct(m['engaged_share'])} | {_pct(m['added_trip_time'])}"
+                         f"{_interval(m['added_trip_time_interval'])} | {m['not_arrived']} |")
     lines += ["", "## System level (Guerin et al. 2022)", "",
               "| condition | safety gain | residual hazard | availability cost |", "|---|---|---|---|"]
     for condition, m in summary["by_condition"].items():

@@ -15,6 +15,12 @@ baseline run of the same scenario:
   the share of time spent braking and the **added trip time** (relative to the baseline's
   trip over the same route).
 
+The rates the goals are stated in (avoidance of the avoidable collisions, also of those the
+detector missed, and the false-brake rate) come with 95 % Wilson score intervals: each
+scenario is an independent trial, and a rate of 84 % of 38 runs is as far from 95 % as its
+interval says, not more. The added trip time comes with a t interval of the mean over the
+drives.
+
 System-level measures after Guerin, Ferreira, Delmas and Guiochet, "Unifying Evaluation of
 Machine Learning Safety Monitors" (ISSRE 2022, arXiv:2208.14660). They define a monitor's
 **safety gain** (the hazard it removes), **residual hazard** (what remains with it) and
@@ -30,9 +36,11 @@ return is the route covered per second (progress rate). Then, over the runs of a
 """
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 
 import numpy as np
+from scipy.stats import norm, t as student_t
 
 from monitor.offline.closed_loop import BASELINE, Run
 from monitor.offline.scenarios import HAZARD_KINDS
@@ -67,6 +75,28 @@ def _mean(values) -> float:
     return float(np.mean(values)) if values else float("nan")
 
 
+def wilson_interval(successes: int, trials: int, level: float = 0.95) -> tuple[float, float]:
+    """Wilson's score interval of a binomial rate (Wilson 1927): ``(lo, hi)``, NaN without
+    trials. Unlike the normal approximation it stays inside [0, 1] and is not empty at
+    0 or ``trials`` successes."""
+    if not trials:
+        return float("nan"), float("nan")
+    z = float(norm.ppf(0.5 + level / 2))
+    p = successes / trials
+    centre = (p + z * z / (2 * trials)) / (1 + z * z / trials)
+    half = z / (1 + z * z / trials) * math.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def mean_interval(values, level: float = 0.95) -> tuple[float, float]:
+    """Student's t interval of a mean: ``(lo, hi)``; NaN for fewer than two values."""
+    values = np.asarray(list(values), dtype=np.float64)
+    if values.size < 2:
+        return float("nan"), float("nan")
+    half = float(student_t.ppf(0.5 + level / 2, values.size - 1) * values.std(ddof=1) / math.sqrt(values.size))
+    return float(values.mean()) - half, float(values.mean()) + half
+
+
 def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
     """Collision and avoidance measures of (baseline, shielded) pairs of hazard scenarios."""
     n = len(pairs)
@@ -84,8 +114,10 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "avoidance_rate": _rate(avoided(base_hits), len(base_hits)),
         "avoidable_collisions": len(avoidable),
         "avoidance_rate_avoidable": _rate(avoided(avoidable), len(avoidable)),
+        "avoidance_rate_avoidable_interval": wilson_interval(avoided(avoidable), len(avoidable)),
         "avoidable_missed_collisions": len(missed),
         "avoidance_rate_avoidable_missed": _rate(avoided(missed), len(missed)),
+        "avoidance_rate_avoidable_missed_interval": wilson_interval(avoided(missed), len(missed)),
         "unavoidable_collisions": len(unavoidable),
         "avoidance_rate_unavoidable": _rate(avoided(unavoidable), len(unavoidable)),
         "impact_speed_baseline": _mean(b.impact_speed for b, _ in base_hits),
@@ -100,13 +132,17 @@ def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
     """False braking and trip time of (baseline, shielded) pairs of hazard-free drives."""
     n = len(pairs)
     frames = sum(s.frames for _, s in pairs)
+    engaged = sum(s.engaged_frames > 0 for _, s in pairs)
+    added = [s.trip_time / b.trip_time - 1.0 for b, s in pairs]
     return {
         "runs": n,
-        "false_brake_rate": _rate(sum(s.engaged_frames > 0 for _, s in pairs), n),
+        "false_brake_rate": _rate(engaged, n),
+        "false_brake_rate_interval": wilson_interval(engaged, n),
         "baseline_brake_rate": _rate(sum(b.braking_frames > 0 for b, _ in pairs), n),
         "braking_share": _rate(sum(s.braking_frames for _, s in pairs), frames),
         "engaged_share": _rate(sum(s.engaged_frames for _, s in pairs), frames),
-        "added_trip_time": _mean(s.trip_time / b.trip_time - 1.0 for b, s in pairs),
+        "added_trip_time": _mean(added),
+        "added_trip_time_interval": mean_interval(added),
         "not_arrived": sum(s.outcome != "arrived" for _, s in pairs),
     }
 

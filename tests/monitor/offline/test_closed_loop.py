@@ -1,5 +1,6 @@
 """The closed loop with traffic: stopping distances by hand, detected and unseen obstacles,
 reproducibility, serial against parallel, and the measures on hand-made runs."""
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -276,5 +277,22 @@ def test_measures_by_hand():
     # hazard: baseline 3 / 6 runs, shield 1 / 6; reward 1/trip: mean(1/12, 1/10) vs 1/10
     assert g["safety_gain"] == pytest.approx(2 / 6) and g["residual_hazard"] == pytest.approx(1 / 6)
     assert g["availability_cost"] == pytest.approx(1 - (1 / 12 + 1 / 10) / 2 / (1 / 10))
+    assert h["avoidance_rate_avoidable_interval"] == sm.wilson_interval(1, 2)
+    assert h["avoidance_rate_avoidable_missed_interval"] == sm.wilson_interval(1, 1)
+    assert a["false_brake_rate_interval"] == sm.wilson_interval(1, 2)
+    # t interval of (0.2, 0.0): mean 0.1, s = 0.1414, t(0.975, 1 dof) = 12.706
+    lo, hi = a["added_trip_time_interval"]
+    assert (lo, hi) == pytest.approx((0.1 - 12.7062 * 0.1, 0.1 + 12.7062 * 0.1), abs=1e-4)
     with pytest.raises(ValueError, match="expected 'baseline'"):
         sm.pair_runs(runs[1:], shield)
+
+
+@pytest.mark.parametrize("k, n, lo, hi", [  # Newcombe (1998), Table I, method 3 (Wilson's score)
+    (81, 263, 0.2553, 0.3662), (15, 148, 0.0624, 0.1605), (0, 20, 0.0, 0.1611), (1, 29, 0.0061, 0.1718),
+])
+def test_wilson_interval_as_published(k, n, lo, hi):
+    assert sm.wilson_interval(k, n) == pytest.approx((lo, hi), abs=5e-5)
+
+
+def test_intervals_without_trials_are_undefined():
+    assert all(math.isnan(v) for v in sm.wilson_interval(0, 0) + sm.mean_interval([0.3]))
