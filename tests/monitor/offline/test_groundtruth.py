@@ -80,6 +80,12 @@ def test_pairing_is_one_to_one():
     np.testing.assert_allclose(sorted(r.usc), [0.0, 1.0])
 
 
+def _random_boxes(rng, n, extent, sides, depths) -> np.ndarray:
+    """n boxes: centres uniform in [0, extent], sides in ``sides``, depths in ``depths``."""
+    return np.column_stack([rng.uniform(0, extent[0], n), rng.uniform(0, extent[1], n),
+                            rng.uniform(*sides, (n, 2)), rng.uniform(*depths, n)])
+
+
 def _best_total_usc(p, g) -> float:
     """The largest summed USC of any one-to-one pairing, by trying every one."""
     best = 0.0
@@ -94,10 +100,8 @@ def test_summed_usc_is_the_best_of_every_pairing():
     rng = np.random.default_rng(3)
     for _ in range(40):
         n, m = rng.integers(0, 5, size=2)
-        g = np.column_stack([rng.uniform(0, 100, m), rng.uniform(0, 50, m),
-                             rng.uniform(5, 60, (m, 2)), rng.uniform(1, 19, m)])
-        p = np.column_stack([rng.uniform(0, 100, n), rng.uniform(0, 50, n),
-                             rng.uniform(5, 60, (n, 2)), rng.uniform(1, 30, n)])
+        g = _random_boxes(rng, m, (100, 50), (5, 60), (1, 19))  # all within 20 m
+        p = _random_boxes(rng, n, (100, 50), (5, 60), (1, 30))
         r = score(p, g)
         assert r.usc.sum() == pytest.approx(_best_total_usc(p, g), abs=1e-12)
         paired = r.partner >= 0
@@ -119,10 +123,8 @@ def test_scores_bounded_on_random_frames():
     rng = np.random.default_rng(7)
     for _ in range(50):
         n, m = rng.integers(0, 8, size=2)
-        g = np.column_stack([rng.uniform(0, 400, m), rng.uniform(0, 200, m),
-                             rng.uniform(1, 80, (m, 2)), rng.uniform(0, 40, m)])
-        p = np.column_stack([rng.uniform(0, 400, n), rng.uniform(0, 200, n),
-                             rng.uniform(0, 80, (n, 2)), rng.uniform(0, 40, n)])
+        g = _random_boxes(rng, m, (400, 200), (1, 80), (0, 40))
+        p = _random_boxes(rng, n, (400, 200), (0, 80), (0, 40))
         r = score(p, g)
         assert r.n_targets == int((g[:, 4] <= 20.0).sum())
         assert np.all((r.usc >= 0.0) & (r.usc <= 1.0))
