@@ -42,7 +42,7 @@ import fuzzcore
 from fuzzcore.outputs import check_output_folder, write_text
 from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, count_frames, run_spec, select_scenes
 from monitor.config import load_config
-from monitor.offline.bootstrap import bootstrap_tables, interval_cell
+from monitor.offline.bootstrap import bootstrap_tables
 from monitor.offline.evaluation import (PAPER_THRESHOLDS, correlation_table, detection_analysis,
                                 recall_table, rmse_table)
 from monitor.offline.measures import (HazardCriterion, frame_rows, frame_truth, quality_tables,
@@ -50,7 +50,7 @@ from monitor.offline.measures import (HazardCriterion, frame_rows, frame_truth, 
 from monitor.offline.run import observe_plans
 from monitor.report.quality_figure import save_quality_figure
 from monitor.shipped import rules_dir, shipped_rules
-from monitor.report.tables import format_table
+from monitor.report.tables import format_table, interval_cell
 
 QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),

@@ -16,14 +16,14 @@ happened, and a measure undefined on every draw has no interval (NaN), never a p
 """
 from __future__ import annotations
 
-import math
 from typing import Sequence
 
 import numpy as np
 
 from monitor.offline.measures import FrameTruth, alarm_rates, auroc, pearson, rmse, skill
 
-#: the measures with an interval of their own, as :func:`risk_quality` names them
+#: the measures with an interval of their own, named as
+#: :func:`monitor.offline.measures.risk_quality` names them
 INTERVAL_MEASURES = ("pearson", "skill", "auroc", "hit_rate", "false_alarm_rate")
 #: the measures whose difference from the reference predictor gets an interval
 PAIRED_MEASURES = ("pearson", "rmse", "auroc")
@@ -179,12 +179,3 @@ def bootstrap_tables(truth: Sequence[FrameTruth], scenes: Sequence[str], risks: 
             row["notes"] = "; ".join(filter(None, notes))
             paired_rows.append(row)
     return interval_rows, paired_rows
-
-
-def interval_cell(value: float, lo: float, hi: float, fmt: str) -> str:
-    """``value [lo, hi]`` for a report, ``-`` for an undefined value and ``[-]`` for an
-    undefined interval."""
-    def one(x):
-        return "-" if x is None or (isinstance(x, float) and math.isnan(x)) else fmt.format(x)
-    span = "-" if math.isnan(lo) or math.isnan(hi) else f"{one(lo)}, {one(hi)}"
-    return f"{one(value)} [{span}]"

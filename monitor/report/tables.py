@@ -23,3 +23,10 @@ def format_table(rows: Sequence[dict], columns: Sequence[Column], markdown: bool
         return "\n".join(lines + ["| " + " | ".join(r) + " |" for r in body])
     widths = [max(len(x) for x in col) for col in zip(head, *body)]
     return "\n".join("  ".join(x.rjust(w) for x, w in zip(r, widths)) for r in [head] + body)
+
+
+def interval_cell(value: float, lo: float, hi: float, fmt: str) -> str:
+    """``value [lo, hi]`` for a report, ``-`` for an undefined value and ``[-]`` for an
+    undefined interval."""
+    span = "-" if math.isnan(lo) or math.isnan(hi) else f"{_cell(lo, fmt)}, {_cell(hi, fmt)}"
+    return f"{_cell(value, fmt)} [{span}]"

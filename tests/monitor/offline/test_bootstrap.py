@@ -4,8 +4,9 @@ import math
 import numpy as np
 import pytest
 
-from monitor.offline.bootstrap import bootstrap_tables, interval_cell, scene_draws
+from monitor.offline.bootstrap import bootstrap_tables, scene_draws
 from monitor.offline.measures import FrameTruth, rmse
+from monitor.report.tables import interval_cell
 
 
 def _truth(condition, targets, hazards):
