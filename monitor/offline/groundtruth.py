@@ -6,17 +6,17 @@ a prediction scoring 0; the FIS is trained towards ``1 - USC~``.
 
 Pairing (the paper does not say how each G finds its P): one prediction per ground truth,
 the one-to-one assignment of the G within range to the P that maximises the summed USC
-(the Hungarian algorithm on USC itself). A G that no prediction left for it covers scores
-0. P is not range-filtered, so a prediction placed too far away still covers its object, at
+(the Hungarian algorithm on USC itself). A G that none of the predictions left for it
+covers scores 0. P is not range-filtered, so a prediction placed too far away still covers its object, at
 the price DR puts on its distance. There are no matching thresholds: a poor partner already
 scores low through IoG and DR.
 
 An assignment on box-centre distance instead (the paper's pairing of S and P) minimises the
 summed distance over every G, the uncovered ones too, so a G that no prediction covers can
 take a well-placed prediction from the G it lies on when that shortens the sum. In the
-held-out frames of ``fuzzrisk eval``'s default benchmark it scored 227 of the 6,265 ground
-truths (3.6 %) 0 that a detection covers with a USC above 0.8, and 9 % of them moved by
-more than 0.1 (README, results).
+held-out frames of ``fuzzrisk eval``'s default benchmark it gave 227 of the 6,265 ground
+truths (3.6 %) a USC of 0 although a detection covers them with a USC above 0.8, and it
+moved 9 % of them by more than 0.1 (README, results).
 
 A frame without any G within range has no target: status :data:`NO_TARGETS` and NaN
 ``usc_mean`` / ``target``, never a risk of 0.
