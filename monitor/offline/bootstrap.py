@@ -20,10 +20,9 @@ from typing import Sequence
 
 import numpy as np
 
-from monitor.offline.measures import FrameTruth, alarm_rates, auroc, pearson, rmse, skill
+from monitor.offline.measures import FrameTruth, core_measures
 
-#: the measures with an interval of their own, named as
-#: :func:`monitor.offline.measures.risk_quality` names them
+#: the measures with an interval of their own (of :func:`monitor.offline.measures.core_measures`)
 INTERVAL_MEASURES = ("pearson", "skill", "auroc", "hit_rate", "false_alarm_rate")
 #: the measures whose difference from the reference predictor gets an interval
 PAIRED_MEASURES = ("pearson", "rmse", "auroc")
@@ -65,17 +64,6 @@ def scene_draws(scenes: Sequence[str], strata: Sequence[str], draws: int,
         picks = [group[j] for group in groups for j in rng.integers(len(group), size=len(group))]
         out.append(np.concatenate(picks) if picks else np.zeros(0, dtype=np.int64))
     return out
-
-
-def _measures(risk: np.ndarray, target: np.ndarray, hazard: np.ndarray, reference: float,
-              threshold: float) -> dict:
-    """The measures of :data:`INTERVAL_MEASURES` and :data:`PAIRED_MEASURES` on some frames
-    (the definitions of :func:`monitor.offline.measures.risk_quality`)."""
-    has = np.isfinite(target)
-    hit, false = alarm_rates(risk, hazard, threshold)
-    return {"pearson": pearson(risk[has], target[has]), "rmse": rmse(risk[has], target[has]),
-            "skill": skill(risk[has], target[has], reference), "auroc": auroc(risk, hazard),
-            "hit_rate": hit, "false_alarm_rate": false}
 
 
 def _interval(values: np.ndarray, level: float) -> tuple[float, float]:
@@ -151,7 +139,7 @@ def bootstrap_tables(truth: Sequence[FrameTruth], scenes: Sequence[str], risks: 
     interval_rows, paired_rows = [], []
     for name, rows in groups:
         picks = [rows[k] for k in scene_draws(scenes[rows], condition[rows], draws, rng)]
-        per = {p: [_measures(r[k], target[k], hazard[k], reference, threshold) for k in picks]
+        per = {p: [core_measures(r[k], target[k], hazard[k], reference, threshold) for k in picks]
                for p, r in risks.items()}
         for p in risks:
             row = {"condition": name, "predictor": p, "draws": draws}
@@ -164,11 +152,11 @@ def bootstrap_tables(truth: Sequence[FrameTruth], scenes: Sequence[str], risks: 
             interval_rows.append(row)
         if paired_with is None:
             continue
-        base = _measures(risks[paired_with][rows], target[rows], hazard[rows], reference, threshold)
+        base = core_measures(risks[paired_with][rows], target[rows], hazard[rows], reference, threshold)
         for p in risks:
             if p == paired_with:
                 continue
-            whole = _measures(risks[p][rows], target[rows], hazard[rows], reference, threshold)
+            whole = core_measures(risks[p][rows], target[rows], hazard[rows], reference, threshold)
             row = {"condition": name, "predictor": p, "against": paired_with}
             notes = []
             for m in PAIRED_MEASURES:

@@ -303,6 +303,18 @@ def alarm_rates(scores, labels, threshold: float) -> tuple[float, float]:
     return hit, false
 
 
+def core_measures(risk: np.ndarray, target: np.ndarray, hazard: np.ndarray, reference: float,
+                  threshold: float) -> dict:
+    """``pearson, rmse, skill`` of the risk against the target on the frames with one, and
+    ``auroc, hit_rate, false_alarm_rate`` for the hazard frames on all (:func:`risk_quality`
+    adds the rest; :mod:`monitor.offline.bootstrap` resamples these)."""
+    has = np.isfinite(target)
+    hit, false = alarm_rates(risk, hazard, threshold)
+    return {"pearson": pearson(risk[has], target[has]), "rmse": rmse(risk[has], target[has]),
+            "skill": skill(risk[has], target[has], reference), "auroc": auroc(risk, hazard),
+            "hit_rate": hit, "false_alarm_rate": false}
+
+
 # --- tables ------------------------------------------------------------------------------
 
 def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold: float) -> dict:
@@ -340,14 +352,13 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
         notes.append("no hazard frame: no AUROC, AUPRC, hit rate or FPR@95TPR")
     if hazard.all():
         notes.append("only hazard frames: no AUROC, false-alarm rate or FPR@95TPR")
-    hit, false = alarm_rates(risk, hazard, threshold) if risk.size else (float("nan"),) * 2
+    core = core_measures(risk, target, hazard, reference, threshold)
     return {
         "frames": int(risk.size), "targets": int(has.sum()), "hazards": int(hazard.sum()),
-        "pearson": pearson(risk[has], target[has]), "spearman": spearman(risk[has], target[has]),
-        "rmse": rmse(risk[has], target[has]), "skill": skill(risk[has], target[has], reference),
-        "auroc": auroc(risk, hazard) if risk.size else float("nan"),
+        "pearson": core["pearson"], "spearman": spearman(risk[has], target[has]),
+        "rmse": core["rmse"], "skill": core["skill"], "auroc": core["auroc"],
         "auprc": auprc(risk, hazard) if risk.size else float("nan"),
-        "hit_rate": hit, "false_alarm_rate": false,
+        "hit_rate": core["hit_rate"], "false_alarm_rate": core["false_alarm_rate"],
         "fpr95": fpr_at_tpr(risk, hazard) if risk.size else float("nan"),
         "alarm_rate": float(np.mean(risk > threshold)) if risk.size else float("nan"),
         "notes": "; ".join(notes),
