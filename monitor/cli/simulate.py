@@ -223,8 +223,9 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
               "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time).", "",
               "## Hazards (baseline collisions avoided by the shield)", "",
               "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
-              "avoidable, detector missed: avoided | unavoidable | impact v (shield) | shield-only | rear-ended |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "avoidable, detector missed: avoided | avoidable once in the path: avoided | unavoidable | "
+              "impact v (shield) | shield-only | rear-ended |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     rows = []
     for kind, by_condition in summary["by_kind_condition"].items():
         if kind == "hazard-free":
@@ -236,6 +237,8 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
                         f"{_interval(m['avoidance_rate_avoidable_interval'])} | "
                         f"{_pct(m['avoidance_rate_avoidable_missed'])} of {m['avoidable_missed_collisions']}"
                         f"{_interval(m['avoidance_rate_avoidable_missed_interval'])} | "
+                        f"{_pct(m['avoidance_rate_avoidable_in_path'])} of {m['avoidable_in_path_collisions']}"
+                        f"{_interval(m['avoidance_rate_avoidable_in_path_interval'])} | "
                         f"{m['unavoidable_collisions']} ({_pct(m['avoidance_rate_unavoidable'])} avoided) | "
                         f"{_num(m['impact_speed_shielded'])} m/s | {m['shield_only_collisions']} | "
                         f"{m['rear_ended_shielded']} |")

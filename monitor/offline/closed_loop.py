@@ -42,6 +42,13 @@ it does. From the onset to the end of the baseline's drive, the onset also count
 frames and those in which the baseline's detector reported the hazard (score >=
 ``min_score``): a collision with a hazard the detector saw is the planner's to avoid, one
 with a hazard it missed is the monitor's.
+
+A hazard that moves into the path (a pedestrian stepping out, a cut-in) can be avoided from
+its onset only by a driver that foresees it, as a tracker of a detection does. The onset
+therefore also records its *entry*, the first frame from the onset at which the hazard
+overlaps the ego's path (:meth:`World.hazard_in_path`), with the same avoidability test: a
+shield that brakes for what stands in the path can avoid a collision only where the gap at
+entry allows it, unless it too predicts.
 """
 from __future__ import annotations
 
@@ -216,7 +223,9 @@ class Run:
         At the hazard's onset (computed on the baseline's drive): ``time``, ``gap``, ``speed``,
         ``required`` (the gap the shield's deceleration needs) and ``avoidable``; ``frames``
         from the onset to the end of the baseline's drive and ``seen_frames``, those in which
-        the baseline's detector reported the hazard (score >= the driver's ``min_score``).
+        the baseline's detector reported the hazard (score >= the driver's ``min_score``);
+        ``entry``: ``time``, ``gap``, ``speed``, ``required`` and ``avoidable`` at the first
+        of those frames in which the hazard overlapped the ego's path (None if it never did).
     history : dict of lists
         Per frame: ``time``, ``speed``, ``gap`` (to the hazard, NaN without), ``risk`` (NaN for
         the baseline), ``engaged``, ``decel`` (applied, m/s^2).
@@ -377,10 +386,12 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and distance <= max_range:
-                onset = _onset(world, driver, shield_decel)
+                onset = {**_situation(world, driver, shield_decel), "frames": 0, "seen_frames": 0, "entry": None}
             if onset is not None and group[0].shield is None:  # the baseline's drive, from the onset
                 onset["frames"] += 1
                 onset["seen_frames"] += bool(np.any((dets.source == hazard_row) & (dets.scores >= driver.min_score)))
+                if onset["entry"] is None and world.hazard_in_path():
+                    onset["entry"] = _situation(world, driver, shield_decel)
             trusted = dets.boxes3d[dets.scores >= driver.min_score]
             parts: dict[tuple, list] = {}
             for m in group:
@@ -432,13 +443,14 @@ def _acting_speed(world: World, queue: deque, dt: float) -> float:
     return min(max(speed, 0.0), max(world.ego.speed, world.ego.cruise))
 
 
-def _onset(world: World, driver: Driver, decel: float) -> dict:
+def _situation(world: World, driver: Driver, decel: float) -> dict:
+    """The gap to the hazard now, and whether braking at ``decel`` from now stops short of it."""
     hazard = world.hazard
     speed_along = float(hazard.actor.speed * math.cos(hazard.actor.heading))
     need = required_gap(world.ego.speed, decel, driver.reaction, max(speed_along, 0.0), hazard.decel)
     gap = world.hazard_gap()
     return {"time": world.time, "gap": gap, "speed": float(world.ego.speed), "required": need,
-            "avoidable": bool(gap > need), "frames": 0, "seen_frames": 0}
+            "avoidable": bool(gap > need)}
 
 
 def _advance(world: World, command: float, group: list[_Member], driver: Driver) -> bool:

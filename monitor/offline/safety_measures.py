@@ -9,7 +9,9 @@ baseline run of the same scenario:
   the hazard's onset) and the unavoidable ones, and over the avoidable ones whose hazard
   the baseline's detector *missed* (reported in fewer than ``SEEN_SHARE`` of the frames from
   the onset to the collision: the monitor's case; a hazard the detector saw and the planner
-  still hit is the planner's); the mean impact speed of the collisions left; collisions
+  still hit is the planner's), and over the avoidable ones still avoidable when the hazard
+  entered the ego's path (``Run.onset["entry"]``: those a shield can avoid without
+  foreseeing where the hazard goes); the mean impact speed of the collisions left; collisions
   only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   the share of time spent braking and the **added trip time** (relative to the baseline's
@@ -104,6 +106,7 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
     avoidable = [(b, s) for b, s in base_hits if b.onset is not None and b.onset["avoidable"]]
     unavoidable = [(b, s) for b, s in base_hits if not (b.onset is not None and b.onset["avoidable"])]
     missed = [(b, s) for b, s in avoidable if b.onset["seen_frames"] < SEEN_SHARE * b.onset["frames"]]
+    in_path = [(b, s) for b, s in avoidable if b.onset["entry"] is not None and b.onset["entry"]["avoidable"]]
     avoided = lambda group: sum(not s.collided for _, s in group)  # noqa: E731
     return {
         "runs": n,
@@ -118,6 +121,9 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "avoidable_missed_collisions": len(missed),
         "avoidance_rate_avoidable_missed": _rate(avoided(missed), len(missed)),
         "avoidance_rate_avoidable_missed_interval": wilson_interval(avoided(missed), len(missed)),
+        "avoidable_in_path_collisions": len(in_path),
+        "avoidance_rate_avoidable_in_path": _rate(avoided(in_path), len(in_path)),
+        "avoidance_rate_avoidable_in_path_interval": wilson_interval(avoided(in_path), len(in_path)),
         "unavoidable_collisions": len(unavoidable),
         "avoidance_rate_unavoidable": _rate(avoided(unavoidable), len(unavoidable)),
         "impact_speed_baseline": _mean(b.impact_speed for b, _ in base_hits),

@@ -318,6 +318,14 @@ class World:
             return float("nan")
         return float(self.hazard.actor.polygon()[:, 0].min() - (self.ego.position[0] + 0.5 * EGO_LENGTH_M))
 
+    def hazard_in_path(self) -> bool:
+        """Does the hazard overlap the ego's path, the band of the ego's width along the road?"""
+        if self.hazard is None:
+            return False
+        y = self.hazard.actor.polygon()[:, 1]
+        return bool(y.max() > self.ego.position[1] - EGO_HALF_WIDTH_M and
+                    y.min() < self.ego.position[1] + EGO_HALF_WIDTH_M)
+
     def hazard_passed(self) -> bool:
         """The ego's rear is past the hazard."""
         return (self.hazard is not None and

@@ -17,6 +17,7 @@ from monitor.offline.closed_loop import (  # noqa: E402
     BASELINE, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
 )
 from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
+from monitor.synthetic.scene import EGO_HALF_WIDTH_M  # noqa: E402
 from monitor.risk_monitor import RiskMonitor  # noqa: E402
 from monitor.shipped import shipped_rules  # noqa: E402
 from monitor.synthetic import generate_frames, get_condition  # noqa: E402
@@ -163,6 +164,27 @@ def test_a_walker_always_detected_the_planner_that_predicts_stops_for(perception
     assert avoidable >= 4 and late >= 2
 
 
+def test_a_walker_enters_the_path_when_its_side_crosses_the_ego_s_by_hand(perception):
+    # no detection, no shield: the baseline drives on at its cruise speed while a pedestrian
+    # steps out across its path (world frame: y to the right, the ego's centreline y = 0)
+    for seed in range(4):
+        spec = ScenarioSpec("pedestrian", "nominal", seed)
+        world = build_world(spec)
+        walker = world.hazard.actor
+        (base,) = run_scenario(spec, perception, None, condition=BLIND)
+        onset, entry = base.onset, base.onset["entry"]
+        # frame k sees the walker moved in the frames before it that started at or after its start
+        k = 0
+        while walker.position[1] - 0.5 * walker.LENGTH - 0.1 * walker.walk_speed * max(0, k - math.ceil(
+                walker.start / 0.1 - 1e-9)) >= EGO_HALF_WIDTH_M:
+            k += 1
+        assert entry["time"] == pytest.approx(0.1 * k), seed
+        assert entry["gap"] == pytest.approx(onset["gap"] - base.cruise * (entry["time"] - onset["time"])), seed
+        assert entry["speed"] == base.cruise
+        assert entry["required"] == pytest.approx(stopping_distance(base.cruise, 3.0, 0.2))
+        assert entry["avoidable"] == (entry["gap"] > entry["required"])
+
+
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     seed = _rare_seed("parking")
     spec = ScenarioSpec("rare-object", "nominal", seed)
@@ -174,6 +196,8 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     assert base.onset is not None and base.onset["avoidable"]
     assert base.onset["seen_frames"] == 0 and base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
     assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
+    # it stands in the ego's lane: in the path from its onset
+    assert base.onset["entry"] == {k: base.onset[k] for k in ("time", "gap", "speed", "required", "avoidable")}
     # the obstacle stands where it stood, seen before it came within reach: confirmed by then
     # (here in the same frame), at most two frames later, and avoided
     first = [r.history["engaged"].index(True) for r in (shielded, confirming)]
@@ -240,10 +264,10 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0):
+         engaged=0, impact=0.0, seen=0, in_path=True):
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged)
-    run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen}
+    run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
     return run
 
 
@@ -252,8 +276,9 @@ def test_measures_by_hand():
     runs = [
         # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
         _run("rare-object", 0, BASELINE, "collision", impact=10.0), _run("rare-object", 0, shield),
-        # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen
-        _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3),
+        # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen; it
+        # could no longer be avoided once it entered the path
+        _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3, in_path=False),
         _run("rare-object", 1, shield, "collision", impact=4.0),
         _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0),
         _run("rare-object", 2, shield),
@@ -269,6 +294,8 @@ def test_measures_by_hand():
     assert h["avoidance_rate"] == pytest.approx(2 / 3)
     assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)  # seeds 0 and 1, seed 0 avoided
     assert (h["avoidable_missed_collisions"], h["avoidance_rate_avoidable_missed"]) == (1, 1.0)  # seed 0
+    assert (h["avoidable_in_path_collisions"], h["avoidance_rate_avoidable_in_path"]) == (1, 1.0)  # seed 0
+    assert h["avoidance_rate_avoidable_in_path_interval"] == sm.wilson_interval(1, 1)
     assert h["avoidance_rate_unavoidable"] == 1.0 and h["impact_speed_shielded"] == 4.0
     a = s["by_kind"]["hazard-free"]
     assert a["false_brake_rate"] == 0.5 and a["added_trip_time"] == pytest.approx(0.1)  # (20 % + 0) / 2
