@@ -104,8 +104,9 @@ def test_objects_in_the_corridor_are_found_wall_pole_and_next_lane_are_not():
 
 def test_a_ledge_along_the_road_is_no_object_low_debris_is_one():
     # a kerb-like ledge 0.24 m tall, 0.3 m wide and 8 m long along the lane's right edge (a
-    # kerb as the depth lifts it: its top, a block above its top edge, reads 0.25 m), a
-    # block of debris as low and as narrow but no longer than it is wide, and debris
+    # kerb as the depth lifts it; its top reads 0.25 m: a block across its top edge takes
+    # the ledge's depth at the block's centre, a little above it), a block of debris as low
+    # and as narrow (top 0.26 m, 0.32 m across) but no longer than it is wide, and debris
     # 0.6 m wide and 0.3 m tall ahead in the lane
     ledge = [12.0, -1.6, 0.12, 0.3, 8.0, 0.24, 0.0]
     block = [9.0, 0.0, 0.125, 0.35, 0.35, 0.25, 0.0]

@@ -17,11 +17,11 @@ from monitor.offline.closed_loop import (  # noqa: E402
     BASELINE, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
 )
 from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
-from monitor.synthetic.scene import EGO_HALF_WIDTH_M  # noqa: E402
 from monitor.risk_monitor import RiskMonitor  # noqa: E402
 from monitor.shipped import shipped_rules  # noqa: E402
 from monitor.synthetic import generate_frames, get_condition  # noqa: E402
 from monitor.synthetic.conditions import DETECTOR_CLASSES, DetectorClass  # noqa: E402
+from monitor.synthetic.scene import EGO_HALF_WIDTH_M  # noqa: E402
 
 NOMINAL = get_condition("nominal")
 _EXACT_DETECTOR = replace(
