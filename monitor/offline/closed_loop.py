@@ -9,7 +9,9 @@ Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
    scenario's condition;
 2. the **baseline** driver brakes at ``brake`` m/s^2 when a detection (score >= ``min_score``)
    lies in its corridor, or will by the time the ego gets there (its track's lateral speed,
-   :class:`~monitor.offline.tracking.Tracker`, over at most ``predict_s`` seconds), within
+   :class:`~monitor.offline.tracking.Tracker`, over at most ``predict_s`` seconds; a track
+   with a lateral speed that the detector missed in this frame counts at its predicted
+   centre, :meth:`~monitor.offline.tracking.Tracker.coasting`), within
    its stopping distance plus a margin (from the speed its brake
    would act at, the commands already on their way acting first, and with the frames it
    takes to confirm counted as reaction) in ``confirm_frames``
@@ -395,9 +397,14 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             trusted = dets.boxes3d[dets.scores >= driver.min_score]
             parts: dict[tuple, list] = {}
             for m in group:
-                lateral = None if m.tracker is None else m.tracker.update(trusted[:, :2], world.time,
-                                                                          world.ego.position[0])
-                seen = in_reach(trusted, _acting_speed(world, m.queue, driver.dt), driver, lateral)
+                boxes, lateral = trusted, None
+                if m.tracker is not None:
+                    lateral = m.tracker.update(trusted[:, :2], world.time, world.ego.position[0])
+                    centres, speeds = m.tracker.coasting()
+                    coasting = np.zeros((len(centres), 7))
+                    coasting[:, :2] = centres  # a point: the tracker keeps no size
+                    boxes, lateral = np.vstack([trusted, coasting]), np.concatenate([lateral, speeds])
+                seen = in_reach(boxes, _acting_speed(world, m.queue, driver.dt), driver, lateral)
                 m.confirmed, m.missed = (m.confirmed + 1, 0) if seen else (0, m.missed + 1)
                 if m.confirmed >= driver.confirm_frames:
                     m.braking = True

@@ -9,7 +9,9 @@ track on the road plane; each frame's detections assigned to the tracks by the l
 Mahalanobis distance inside a gate (global nearest neighbour); a new track for each
 detection left over; a track dropped after ``MAX_MISSES`` frames without a detection. A
 track's lateral speed is used once a run of detections close to its predictions confirms
-it.
+it; a track that had one at its last detection and misses a frame still tells where it
+goes (:meth:`Tracker.coasting`), as a walker the detector loses for a frame or two goes
+on walking.
 
 A monocular 3D detector places an object well in bearing and poorly in distance, so the
 measurement's covariance is an ellipse along the line of sight from the camera:
@@ -83,6 +85,8 @@ class Tracker:
         self._cov = np.zeros((0, 4, 4))
         self._run = np.zeros(0, dtype=np.int64)
         self._misses = np.zeros(0, dtype=np.int64)
+        self._speed = np.zeros(0)  # the lateral speed reported at each track's last detection
+        self._odometer = 0.0
         self._time = None
 
     def update(self, centres: np.ndarray, time: float, odometer: float) -> np.ndarray:
@@ -127,6 +131,7 @@ class Tracker:
             vy, sd = self._state[t, 3], math.sqrt(self._cov[t, 3, 3])
             if self._run[t] >= MIN_RUN and abs(vy) >= max(MIN_LATERAL_SPEED, SIGNIFICANCE * sd):
                 speeds[c] = vy
+            self._speed[t] = speeds[c]
         self._misses[assigned] = 0
         self._misses[~assigned] += 1
         self._run[self._misses >= 2] = 0  # two frames in a row without a detection end a run
@@ -140,7 +145,23 @@ class Tracker:
         self._cov = np.concatenate([self._cov[keep], init])
         self._run = np.concatenate([self._run[keep], np.ones(len(init), dtype=np.int64)])
         self._misses = np.concatenate([self._misses[keep], np.zeros(len(init), dtype=np.int64)])
+        self._speed = np.concatenate([self._speed[keep], np.zeros(len(init))])
+        self._odometer = float(odometer)
         return speeds
+
+    def coasting(self) -> tuple[np.ndarray, np.ndarray]:
+        """The tracks that got no detection in the last :meth:`update` but had a lateral
+        speed at their last one (for up to ``MAX_MISSES`` frames, until they are dropped).
+
+        Returns
+        -------
+        centres : ndarray of shape (k, 2), float64
+            Their predicted centres ``x, y`` in the ego frame of that update, metres.
+        speeds : ndarray of shape (k,), float64
+            The lateral speeds reported at their last detections, m/s.
+        """
+        coast = (self._misses >= 1) & (self._speed != 0.0)
+        return self._state[coast, :2] - np.array([self._odometer, 0.0]), self._speed[coast].copy()
 
     def _predict(self, dt: float) -> None:
         F = np.eye(4)

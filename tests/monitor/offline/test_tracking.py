@@ -99,6 +99,27 @@ def test_tracks_coast_through_missed_frames_and_keep_apart():
     assert list(again) == [0.0, 0.0] and len(tracker._state) == 2
 
 
+def test_a_walker_the_detector_misses_coasts_where_it_goes_a_parked_car_does_not():
+    # a walker 12 m ahead crossing at 1.5 m/s to the right and a car parked 4 m to the left,
+    # measured exactly, the ego at 5 m/s; both missed from frame 10 on
+    tracker = Tracker(SENSOR)
+    for k in range(10):
+        speeds = tracker.update(np.array([[12.0 - 0.5 * k, 3.0 - 0.15 * k], [20.0 - 0.5 * k, 4.0]]),
+                                0.1 * k, 0.5 * k)
+        assert len(tracker.coasting()[0]) == 0  # nothing missed
+    walker_speed = speeds[0]
+    assert walker_speed < -1.4 and speeds[1] == 0.0
+    for k in range(10, 11 + tracking.MAX_MISSES):
+        tracker.update(np.zeros((0, 2)), 0.1 * k, 0.5 * k)
+        centres, coasting = tracker.coasting()
+        if k - 9 <= tracking.MAX_MISSES:
+            # the walker alone, where it walks (within the filter's lag), at its last speed
+            assert coasting.tolist() == [walker_speed]
+            np.testing.assert_allclose(centres, [[12.0 - 0.5 * k, 3.0 - 0.15 * k]], atol=0.1)
+        else:  # dropped
+            assert len(centres) == 0
+
+
 def test_a_track_is_dropped_after_max_misses_and_false_positives_get_no_speed():
     tracker = Tracker(SENSOR)
     tracker.update(np.array([[10.0, 0.0]]), 0.0, 0.0)
