@@ -21,6 +21,7 @@ from monitor.risk_monitor import RiskMonitor  # noqa: E402
 from monitor.shipped import shipped_rules  # noqa: E402
 from monitor.synthetic import generate_frames, get_condition  # noqa: E402
 from monitor.synthetic.conditions import DETECTOR_CLASSES, DetectorClass  # noqa: E402
+from monitor.synthetic.degrade import Detections  # noqa: E402
 from monitor.synthetic.scene import EGO_HALF_WIDTH_M  # noqa: E402
 
 NOMINAL = get_condition("nominal")
@@ -197,7 +198,7 @@ class _EveryOther(Perception):
         self.frames += 1
         if self.frames % 2:
             k = dets.source != hazard_row
-            dets = type(dets)(dets.boxes3d[k], dets.classes[k], dets.scores[k], dets.source[k])
+            dets = Detections(dets.boxes3d[k], dets.classes[k], dets.scores[k], dets.source[k])
         return depth, dets, visible, distance, hazard_row
 
 
