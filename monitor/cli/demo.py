@@ -89,7 +89,8 @@ _QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), 
             ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
             ("auprc", "AUPRC", "{:.2f}"), ("hit_rate", "hit", "{:.0%}"),
             ("false_alarm_rate", "false al.", "{:.0%}"), ("fpr95", "FPR@95", "{:.0%}"),
-            ("recall", "S recall", "{:.2f}"), ("precision", "S precision", "{:.2f}")]
+            ("recall", "S recall", "{:.2f}"), ("precision", "S precision", "{:.2f}"),
+            ("hazards_in_view", "in view", "{:.0%}")]
 
 
 def _quality(split: list, fis, name: str, config, out: Path) -> dict:
@@ -103,8 +104,9 @@ def _quality(split: list, fis, name: str, config, out: Path) -> dict:
     risk_rows, depth_rows, risks = quality_tables(test, test_truth, {name: fis}, reference, threshold,
                                                   config.risk.fail_safe)
     depth = {r["condition"]: r for r in depth_rows}
-    rows = [{**r, "recall": depth[r["condition"]]["recall"], "precision": depth[r["condition"]]["precision"]}
-            if r["predictor"] == name else r for r in risk_rows]
+    view = ("recall", "precision", "hazards_in_view")
+    rows = [{**r, **{k: depth[r["condition"]][k] for k in view}} if r["predictor"] == name else r
+            for r in risk_rows]
     conditions = list(dict.fromkeys(ob.condition for ob in test))
     save_quality_figure(out / "quality.png",
                         {c: risks[name][[ob.condition == c for ob in test]] for c in conditions},
@@ -192,7 +194,8 @@ def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) ->
         quality["title"] + ". r, rho: Pearson and Spearman correlation of the risk with the target 1 - USC~; "
         "skill: 1 - RMSE / RMSE of the constant; hit / false al.: alarms on hazard / other frames; FPR@95: "
         "false alarms at a 95 % hit rate; S recall / precision: the depth view against the ground truth "
-        "within range (IoG > 0.5 / intersection over S > 0.5, depths within a ratio of 0.8). Every frame "
+        "within range (IoG > 0.5 / intersection over S > 0.5, depths within a ratio of 0.8); in view: the "
+        "share of hazard frames in which the depth view finds a ground truth no detection covers. Every frame "
         "counts, with the risk the monitor reported. '-': undefined on these frames.", "",
         format_table(quality["rows"], _QUALITY, markdown=True), "",
         *[f"- {note}" for note in quality["notes"]], "",

@@ -10,7 +10,8 @@ training scenes' mean target):
   detection covers: IoG > --hazard-iog and DR > --hazard-dr), hit and false-alarm rates at
   the shield threshold, FPR at 95 % TPR;
 - the depth view's recall and precision of the ground truth within range, the share of
-  frames per status; a figure (``quality.png``): ROC curves and risk against target;
+  hazard frames in which it finds what the detector missed, the share of frames per
+  status; a figure (``quality.png``): ROC curves and risk against target;
 - how sure those are (:mod:`monitor.offline.bootstrap`): each rule base's r, skill, AUROC,
   hit and false-alarm rates with 95 % intervals from ``--bootstrap`` resamples of the
   held-out scenes, and its differences in r, RMSE and AUROC from the monitor's own rule
@@ -59,6 +60,7 @@ QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), (
            ("fpr95", "FPR@95", "{:.0%}")]
 DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gts", "GTs", "{}"),
               ("recall", "recall", "{:.2f}"), ("objects", "S", "{}"), ("precision", "precision", "{:.2f}"),
+              ("hazards_in_view", "hazards in view", "{:.0%}"),
               ("ok", "ok", "{:.0%}"), ("no-objects", "no-objects", "{:.0%}"),
               ("invalid-input", "invalid", "{:.0%}"), ("no-view", "no-view", "{:.0%}"),
               ("no-rule-fired", "no rule", "{:.0%}")]
@@ -210,7 +212,9 @@ def run(args: argparse.Namespace) -> int:
         *_uncertainty_sections(quality, intervals, paired, args.bootstrap, shipped),
         (f"The depth view on the held-out test scenes: recall and precision of the ground truth within range "
          f"(IoG > {criterion.min_iog} resp. intersection over S > {criterion.min_iog}, depth ratio min / max > "
-         f"{criterion.min_dr}), share of frames per status", depth_view, DEPTH_VIEW),
+         f"{criterion.min_dr}); hazards in view: the share of hazard frames in which the view finds a ground "
+         f"truth no detection covers, the highest hit rate that evidence of the missed objects allows; share "
+         f"of frames per status", depth_view, DEPTH_VIEW),
         ("Table I: correlation of S-based and G-based features (all frames)", tables["correlation"], CORRELATION),
         ("Table II: recall of the ground truth by S and by P", tables["recall"], RECALL),
         (f"Table III: the depth view over the detector's TPs and FNs (alpha {config.alignment.alpha}, beta {config.alignment.beta})",

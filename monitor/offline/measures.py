@@ -19,6 +19,9 @@ Per frame (:func:`frame_truth`, independent of the rule base):
   *on* a G when ``area(S & G) / area(S) > min_iog`` (intersection over S, so a box that is
   mostly wall, pole or road is not on a G however much of the G it covers) with a depth in
   the same band;
+- *hazard in view*: some G that no detection covers is found by the depth view. Only then
+  does the frame hold evidence of what the detector missed; in the other hazard frames an
+  alarm rests on something else the frame holds;
 - the monitor's status.
 
 Over frames (:func:`risk_quality` for one predictor's risks, :func:`depth_view_quality`):
@@ -31,7 +34,8 @@ Over frames (:func:`risk_quality` for one predictor's risks, :func:`depth_view_q
 - hit rate and false-alarm rate at the shield threshold (an alarm is ``risk > threshold``),
   and the false-positive rate at 95 % true-positive rate (the lowest FPR of any threshold
   reaching TPR >= 0.95);
-- the share of frames per status; the depth view's recall and precision.
+- the share of frames per status; the depth view's recall and precision; the share of
+  hazard frames in view, the highest hit rate that evidence of the missed objects allows.
 
 A measure that is undefined on the frames given (no hazard frame, no non-hazard frame,
 fewer than three targets, a constant risk for a correlation) is NaN, and the result's
@@ -96,6 +100,8 @@ class FrameTruth:
         Depth-view objects S (0 for an invalid frame: there was no depth view).
     on_truth : int
         Of those, how many lie on a ground truth.
+    hazard_in_view : bool
+        A ground truth within range that no detection covers is found by the depth view.
     """
 
     condition: str
@@ -106,6 +112,7 @@ class FrameTruth:
     found: int
     objects: int
     on_truth: int
+    hazard_in_view: bool
 
 
 def _pairwise(kernel, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -165,7 +172,7 @@ def frame_truth(ob: Observation, criterion: HazardCriterion = HazardCriterion())
     S = ob.report.S if ob.report.status != INVALID_INPUT else np.zeros((0, 5))
     covered, found, on_truth = coverage(ob.P, S, G, criterion)
     return FrameTruth(ob.condition, ob.report.status, ob.target, bool((~covered).any()), len(G),
-                      int(found.sum()), len(S), int(on_truth.sum()))
+                      int(found.sum()), len(S), int(on_truth.sum()), bool((~covered & found).any()))
 
 
 def rule_base_risk(observations: Sequence[Observation], fis, fail_safe_risk: float) -> np.ndarray:
@@ -366,14 +373,17 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
 
 
 def depth_view_quality(truth: Sequence[FrameTruth]) -> dict:
-    """The depth view's recall and precision of ground truth within range, and the share
+    """The depth view's recall and precision of ground truth within range, the share of
+    hazard frames in view (``hazards_in_view``, NaN without a hazard frame) and the share
     of frames per status (each of :data:`monitor.risk_monitor.STATUSES`)."""
     gts = sum(t.gts for t in truth)
     objects = sum(t.objects for t in truth)
+    hazards = sum(t.hazard for t in truth)
     n = len(truth)
     out = {"frames": n, "gts": gts, "objects": objects,
            "recall": sum(t.found for t in truth) / gts if gts else float("nan"),
-           "precision": sum(t.on_truth for t in truth) / objects if objects else float("nan")}
+           "precision": sum(t.on_truth for t in truth) / objects if objects else float("nan"),
+           "hazards_in_view": sum(t.hazard_in_view for t in truth) / hazards if hazards else float("nan")}
     for status in STATUSES:
         out[status] = sum(t.status == status for t in truth) / n if n else float("nan")
     return out
@@ -464,8 +474,9 @@ def frame_rows(observations: Sequence[Observation], truth: Sequence[FrameTruth],
         ``scene, condition, split, frame, time, status``; the features ``iou, rdd`` (null
         unless the rule base ran); ``objects`` (S), ``unseen`` (of those, how many no
         detection covers; null for a frame without a view), ``detections`` (P); ``target``
-        (1 - USC~, null without ground truth in range), ``hazard``, ``gts``, ``found``,
-        ``on_truth`` (:class:`FrameTruth`); ``risk``, rule base name -> risk.
+        (1 - USC~, null without ground truth in range), ``hazard``, ``hazard_in_view``,
+        ``gts``, ``found``, ``on_truth`` (:class:`FrameTruth`); ``risk``, rule base name ->
+        risk.
     """
     lengths = {len(observations), len(truth), *(len(r) for r in risks.values())}
     if len(lengths) > 1:
@@ -482,6 +493,6 @@ def frame_rows(observations: Sequence[Observation], truth: Sequence[FrameTruth],
             "rdd": None if math.isnan(report.rdd) else report.rdd,
             "objects": t.objects, "unseen": None if report.unseen is None else len(report.unseen),
             "detections": len(ob.P), "target": None if math.isnan(t.target) else t.target,
-            "hazard": t.hazard, "gts": t.gts, "found": t.found, "on_truth": t.on_truth,
+            "hazard": t.hazard, "hazard_in_view": t.hazard_in_view, "gts": t.gts, "found": t.found, "on_truth": t.on_truth,
             "risk": {name: float(r[k]) for name, r in risks.items()}})
     return rows

@@ -40,7 +40,7 @@ def test_demo_writes_its_reports(tmp_path, capsys):
     assert len(rows) == 4 and {r["condition"] for r in rows} == {"nominal", "night"}
     assert all(0.0 <= r["risk"] <= 1.0 and r["status"] in ("ok", "no-objects", "invalid-input") for r in rows)
     report = (out / "report.md").read_text()
-    assert "synthetic" in report and "| nominal |" in report
+    assert "synthetic" in report and "| nominal |" in report and "| in view |" in report
     for name in ("fis.png", "risk_timeline.png", "retrieval_stages.png", "frame_nominal.png", "frame_night.png"):
         assert (out / name).stat().st_size > 1000
 

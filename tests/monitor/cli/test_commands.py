@@ -58,6 +58,11 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
         scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
         err = np.array([r - t for r, t in scored])
         assert len(scored) > 0 and row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
+    # the hazard frames in which the depth view finds what the detector missed
+    in_view = np.array([f["hazard_in_view"] for f in test])
+    assert not (in_view & ~hazard).any()
+    depth = next(r for r in tables["depth_view"] if r["condition"] == "all")
+    assert depth["hazards_in_view"] == pytest.approx(in_view[hazard].mean(), rel=1e-12)
     # one held-out scene: every resample of the bootstrap is that scene, so each interval is the
     # measure itself, and each paired difference the difference of the measures
     assert "How sure: 95 % intervals" in report and "Against the monitor's rule base fuzzrisk.yaml" in report

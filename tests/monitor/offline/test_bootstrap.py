@@ -10,7 +10,7 @@ from monitor.report.tables import interval_cell
 
 
 def _truth(condition, targets, hazards):
-    return [FrameTruth(condition, "ok", t, h, 1, 0, 0, 0) for t, h in zip(targets, hazards)]
+    return [FrameTruth(condition, "ok", t, h, 1, 0, 0, 0, False) for t, h in zip(targets, hazards)]
 
 
 def test_draws_take_whole_scenes_as_many_as_each_condition_has():

@@ -169,14 +169,22 @@ def _observation(status, S_, P_, G_, risk=0.3, iou=0.5, rdd=0.1):
 
 def test_frame_truth_of_an_ok_and_an_invalid_frame():
     t = frame_truth(_observation(OK, S, P, G))
-    # no G covered by P -> hazard; S finds both, one S of three is on a G
-    assert t == FrameTruth("nominal", OK, score(P, G).target, True, 2, 2, 3, 1)
-    # the detections cover both G: no hazard
+    # no G covered by P -> hazard; S finds both (so the hazard is in view), one S of three
+    # is on a G
+    assert t == FrameTruth("nominal", OK, score(P, G).target, True, 2, 2, 3, 1, True)
+    # the detections cover both G: no hazard, so none in view though S finds both
     P_good = np.array([[100, 100, 20, 20, 10.0], [300, 100, 40, 20, 7.0]])
-    assert not frame_truth(_observation(OK, S, P_good, G)).hazard
+    t = frame_truth(_observation(OK, S, P_good, G))
+    assert (t.hazard, t.found, t.hazard_in_view) == (False, 2, False)
+    # P covers G0 only, and S finds only G0 (S0): the missed G1 is not in view
+    P_g0 = np.array([[100, 100, 20, 20, 10.0]])
+    t = frame_truth(_observation(OK, S[[0, 2]], P_g0, G))
+    assert (t.hazard, t.found, t.hazard_in_view) == (True, 1, False)
+    # ... and S finds G1 (S1) as well: in view
+    assert frame_truth(_observation(OK, S, P_g0, G)).hazard_in_view
     # an invalid frame has no depth view: S counts for nothing
     t = frame_truth(_observation(INVALID_INPUT, S, P, G, risk=1.0))
-    assert (t.objects, t.found, t.gts, t.hazard) == (0, 0, 2, True)
+    assert (t.objects, t.found, t.gts, t.hazard, t.hazard_in_view) == (0, 0, 2, True, False)
 
 
 def test_rule_base_risk_keeps_the_reported_risk_of_frames_without_features():
@@ -195,15 +203,17 @@ def test_frame_rows_hold_each_frames_truth_and_risks_as_strict_json():
     assert json.loads(json.dumps(rows, allow_nan=False)) == rows
     assert [(r["split"], r["status"], r["iou"], r["rdd"], r["risk"]) for r in rows] == [
         ("test", OK, 0.7, 0.05, {"a": 0.4}), ("test", INVALID_INPUT, None, None, {"a": 1.0})]
-    assert (rows[1]["objects"], rows[1]["found"], rows[1]["hazard"]) == (0, 0, True)  # no view
+    assert (rows[1]["objects"], rows[1]["found"], rows[1]["hazard"], rows[1]["hazard_in_view"]) == \
+        (0, 0, True, False)  # no view
+    assert rows[0]["hazard_in_view"]
     assert rows[0]["target"] == score(P, G).target and rows[0]["detections"] == len(P)
     assert frame_rows(obs, truth, {"a": np.zeros(2)}, test_scenes=())[0]["split"] == "train"
     with pytest.raises(ValueError, match=r"2 observations, 2 FrameTruth and risks of \[3\] frames"):
         frame_rows(obs, truth, {"a": np.zeros(3)}, test_scenes=())
 
 
-def _truth(target, hazard, status=OK, gts=1, found=0, objects=0, on_truth=0):
-    return FrameTruth("nominal", status, target, hazard, gts, found, objects, on_truth)
+def _truth(target, hazard, status=OK, gts=1, found=0, objects=0, on_truth=0, in_view=False):
+    return FrameTruth("nominal", status, target, hazard, gts, found, objects, on_truth, in_view)
 
 
 def test_risk_quality_on_a_small_table():
@@ -240,9 +250,12 @@ def test_depth_view_quality_and_status_shares():
     truth = [_truth(0.5, False, OK, gts=3, found=2, objects=4, on_truth=1),
              _truth(0.5, True, NO_OBJECTS, gts=1, found=0, objects=0),
              _truth(np.nan, False, OK, gts=0, objects=2, on_truth=0),
-             _truth(1.0, True, INVALID_INPUT, gts=2)]
+             _truth(1.0, True, INVALID_INPUT, gts=2),
+             _truth(0.8, True, OK, gts=2, found=1, objects=1, on_truth=1, in_view=True)]
     q = depth_view_quality(truth)
-    # found 2 of 3 + 1 + 2 = 6 G; 1 of 6 S on a G
-    assert q["recall"] == pytest.approx(2 / 6) and q["precision"] == pytest.approx(1 / 6)
-    assert (q[OK], q[NO_OBJECTS], q[INVALID_INPUT]) == (0.5, 0.25, 0.25)
-    assert math.isnan(depth_view_quality([_truth(np.nan, False, gts=0)])["recall"])
+    # found 2 of 3 + 1 + 2 + 2 = 8 G, 1 of them by the last frame; 2 of 7 S on a G
+    assert q["recall"] == pytest.approx(3 / 8) and q["precision"] == pytest.approx(2 / 7)
+    assert (q[OK], q[NO_OBJECTS], q[INVALID_INPUT]) == (0.6, 0.2, 0.2)
+    assert q["hazards_in_view"] == pytest.approx(1 / 3)  # of the three hazard frames
+    nothing = depth_view_quality([_truth(np.nan, False, gts=0)])
+    assert math.isnan(nothing["recall"]) and math.isnan(nothing["hazards_in_view"])
