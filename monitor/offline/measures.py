@@ -32,8 +32,9 @@ Over frames (:func:`risk_quality` for one predictor's risks, :func:`depth_view_q
 - AUROC (the Mann-Whitney U statistic, ties counted 1/2, as scipy and scikit-learn do) and
   AUPRC (average precision, scikit-learn's step-wise sum) of the risk for hazard frames;
 - hit rate and false-alarm rate at the shield threshold (an alarm is ``risk > threshold``),
-  and the false-positive rate at 95 % true-positive rate (the lowest FPR of any threshold
-  reaching TPR >= 0.95);
+  the hit rate on the hazard frames in view alone (what the risk makes of the evidence it
+  has), and the false-positive rate at 95 % true-positive rate (the lowest FPR of any
+  threshold reaching TPR >= 0.95);
 - the share of frames per status; the depth view's recall and precision; the share of
   hazard frames in view, the highest hit rate that evidence of the missed objects allows.
 
@@ -341,14 +342,15 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
     -------
     dict
         ``frames, targets, hazards, pearson, spearman, rmse, skill, auroc, auprc, hit_rate,
-        false_alarm_rate, fpr95, alarm_rate`` and ``notes`` (why a measure is NaN; "" when
-        none is).
+        hit_in_view`` (the hit rate on the hazard frames in view), ``false_alarm_rate,
+        fpr95, alarm_rate`` and ``notes`` (why a measure is NaN; "" when none is).
     """
     risk = np.asarray(risk, dtype=np.float64)
     if risk.shape != (len(truth),):
         raise ValueError(f"risk has shape {risk.shape}, expected ({len(truth)},): one per frame")
     target = np.array([t.target for t in truth], dtype=np.float64)
     hazard = np.array([t.hazard for t in truth], dtype=bool)
+    in_view = np.array([t.hazard_in_view for t in truth], dtype=bool)
     has = np.isfinite(target)
     notes = []
     if has.sum() < 3:
@@ -357,6 +359,8 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
         notes.append("constant risk: no correlation")
     if not hazard.any():
         notes.append("no hazard frame: no AUROC, AUPRC, hit rate or FPR@95TPR")
+    elif not in_view.any():
+        notes.append("no hazard frame in view: no hit rate in view")
     if hazard.all():
         notes.append("only hazard frames: no AUROC, false-alarm rate or FPR@95TPR")
     core = core_measures(risk, target, hazard, reference, threshold)
@@ -365,7 +369,9 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
         "pearson": core["pearson"], "spearman": spearman(risk[has], target[has]),
         "rmse": core["rmse"], "skill": core["skill"], "auroc": core["auroc"],
         "auprc": auprc(risk, hazard) if risk.size else float("nan"),
-        "hit_rate": core["hit_rate"], "false_alarm_rate": core["false_alarm_rate"],
+        "hit_rate": core["hit_rate"],
+        "hit_in_view": float(np.mean(risk[in_view] > threshold)) if in_view.any() else float("nan"),
+        "false_alarm_rate": core["false_alarm_rate"],
         "fpr95": fpr_at_tpr(risk, hazard) if risk.size else float("nan"),
         "alarm_rate": float(np.mean(risk > threshold)) if risk.size else float("nan"),
         "notes": "; ".join(notes),

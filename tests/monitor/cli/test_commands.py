@@ -49,18 +49,19 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
     frames = [json.loads(line) for line in (out / "frames.jsonl").read_text().splitlines()]
     assert [(f["split"], f["frame"]) for f in frames] == [("train", 0), ("train", 1), ("test", 0), ("test", 1)]
     test = [f for f in frames if f["split"] == "test"]
+    hazard = np.array([f["hazard"] for f in test])
+    in_view = np.array([f["hazard_in_view"] for f in test])  # the depth view found what P missed
+    assert not (in_view & ~hazard).any()
     for name in shipped:
         row = next(r for r in tables["quality"] if r["condition"] == "all" and r["predictor"] == name)
         risk = np.array([f["risk"][name] for f in test])
-        hazard = np.array([f["hazard"] for f in test])
         assert row["hazards"] == hazard.sum() > 0  # this street's frames hold missed objects
         assert row["hit_rate"] == np.mean(risk[hazard] > load_config().shield.threshold)
+        assert row["hit_in_view"] == pytest.approx(np.mean(risk[in_view] > load_config().shield.threshold)
+                                                   if in_view.any() else np.nan, nan_ok=True)
         scored = [(f["risk"][name], f["target"]) for f in test if f["target"] is not None]
         err = np.array([r - t for r, t in scored])
         assert len(scored) > 0 and row["rmse"] == pytest.approx(float(np.sqrt(np.mean(err ** 2))), rel=1e-12)
-    # the hazard frames in which the depth view finds what the detector missed
-    in_view = np.array([f["hazard_in_view"] for f in test])
-    assert not (in_view & ~hazard).any()
     depth = next(r for r in tables["depth_view"] if r["condition"] == "all")
     assert depth["hazards_in_view"] == pytest.approx(in_view[hazard].mean(), rel=1e-12)
     # one held-out scene: every resample of the bootstrap is that scene, so each interval is the

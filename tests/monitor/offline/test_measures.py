@@ -217,7 +217,7 @@ def _truth(target, hazard, status=OK, gts=1, found=0, objects=0, on_truth=0, in_
 
 
 def test_risk_quality_on_a_small_table():
-    truth = [_truth(0.9, True), _truth(0.2, False), _truth(np.nan, False, NO_OBJECTS, gts=0),
+    truth = [_truth(0.9, True, in_view=True), _truth(0.2, False), _truth(np.nan, False, NO_OBJECTS, gts=0),
              _truth(0.6, True, INVALID_INPUT), _truth(0.1, False)]
     risk = [0.8, 0.3, 0.0, 1.0, 0.6]
     q = risk_quality(risk, truth, reference=0.5, threshold=0.5)
@@ -232,8 +232,19 @@ def test_risk_quality_on_a_small_table():
     assert q["auroc"] == 1.0 and q["auprc"] == 1.0 and q["fpr95"] == 0.0
     # alarms (> 0.5): both hazards; non-hazards 0.6 only -> 1/3
     assert q["hit_rate"] == 1.0 and q["false_alarm_rate"] == pytest.approx(1 / 3)
+    assert q["hit_in_view"] == 1.0  # the one hazard frame in view, 0.8
     assert q["alarm_rate"] == pytest.approx(3 / 5)
     assert q["notes"] == ""
+
+
+def test_the_hit_rate_in_view_counts_the_hazard_frames_in_view_alone():
+    truth = [_truth(0.5, True, in_view=True), _truth(0.5, True, in_view=True),
+             _truth(0.5, True, in_view=True), _truth(0.5, True), _truth(0.1, False)]
+    q = risk_quality([0.7, 0.4, 0.9, 0.2, 0.3], truth, reference=0.5, threshold=0.5)
+    # alarms (> 0.5) on 0.7 and 0.9: 2 of the 3 in view, 2 of the 4 hazard frames
+    assert q["hit_in_view"] == pytest.approx(2 / 3) and q["hit_rate"] == pytest.approx(2 / 4)
+    q = risk_quality([0.7, 0.2], [_truth(0.5, True), _truth(0.1, False)], reference=0.5, threshold=0.5)
+    assert math.isnan(q["hit_in_view"]) and "no hazard frame in view" in q["notes"]
 
 
 def test_risk_quality_says_why_a_measure_is_undefined():
