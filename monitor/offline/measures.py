@@ -499,6 +499,7 @@ def frame_rows(observations: Sequence[Observation], truth: Sequence[FrameTruth],
             "rdd": None if math.isnan(report.rdd) else report.rdd,
             "objects": t.objects, "unseen": None if report.unseen is None else len(report.unseen),
             "detections": len(ob.P), "target": None if math.isnan(t.target) else t.target,
-            "hazard": t.hazard, "hazard_in_view": t.hazard_in_view, "gts": t.gts, "found": t.found, "on_truth": t.on_truth,
+            "hazard": t.hazard, "hazard_in_view": t.hazard_in_view, "gts": t.gts, "found": t.found,
+            "on_truth": t.on_truth,
             "risk": {name: float(r[k]) for name, r in risks.items()}})
     return rows
