@@ -8,8 +8,8 @@ training scenes' mean target):
 - r and Spearman's rho of the risk against 1 - USC~, RMSE and skill against the constant;
 - AUROC and AUPRC of the risk for hazard frames (a ground truth within range that no
   detection covers: IoG > --hazard-iog and DR > --hazard-dr), hit and false-alarm rates at
-  the shield threshold, the hit rate on the hazard frames the depth view has in view, FPR
-  at 95 % TPR;
+  the shield threshold, the AUROC and the hit rate on the hazard frames the depth view has
+  in view, FPR at 95 % TPR;
 - the depth view's recall and precision of the ground truth within range, the share of
   hazard frames in which it finds what the detector missed, the share of frames per
   status; a figure (``quality.png``): ROC curves and risk against target;
@@ -57,7 +57,8 @@ from monitor.report.tables import format_table, interval_cell
 QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), ("frames", "frames", "{}"),
            ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
            ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
-           ("auprc", "AUPRC", "{:.2f}"), ("hit_rate", "hit", "{:.0%}"), ("hit_in_view", "hit in view", "{:.0%}"),
+           ("auroc_in_view", "AUROC in view", "{:.2f}"), ("auprc", "AUPRC", "{:.2f}"),
+           ("hit_rate", "hit", "{:.0%}"), ("hit_in_view", "hit in view", "{:.0%}"),
            ("false_alarm_rate", "false al.", "{:.0%}"),
            ("fpr95", "FPR@95", "{:.0%}")]
 DEPTH_VIEW = [("condition", "condition", "{}"), ("frames", "frames", "{}"), ("gts", "GTs", "{}"),

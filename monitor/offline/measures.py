@@ -32,9 +32,11 @@ Over frames (:func:`risk_quality` for one predictor's risks, :func:`depth_view_q
 - AUROC (the Mann-Whitney U statistic, ties counted 1/2, as scipy and scikit-learn do) and
   AUPRC (average precision, scikit-learn's step-wise sum) of the risk for hazard frames;
 - hit rate and false-alarm rate at the shield threshold (an alarm is ``risk > threshold``),
-  the hit rate on the hazard frames in view alone (what the risk makes of the evidence it
-  has), and the false-positive rate at 95 % true-positive rate (the lowest FPR of any
-  threshold reaching TPR >= 0.95);
+  the hit rate and the AUROC on the hazard frames in view alone against the hazard-free
+  ones (what the risk makes of the evidence it has: the AUROC over all hazard frames is
+  the in-view share times the AUROC in view plus the rest times the AUROC out of view), and
+  the false-positive rate at 95 % true-positive rate (the lowest FPR of any threshold
+  reaching TPR >= 0.95);
 - the share of frames per status; the depth view's recall and precision; the share of
   hazard frames in view, the highest hit rate that evidence of the missed objects allows.
 
@@ -341,7 +343,8 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
     Returns
     -------
     dict
-        ``frames, targets, hazards, pearson, spearman, rmse, skill, auroc, auprc, hit_rate,
+        ``frames, targets, hazards, pearson, spearman, rmse, skill, auroc, auroc_in_view``
+        (the hazard frames in view against the hazard-free ones), ``auprc, hit_rate,
         hit_in_view`` (the hit rate on the hazard frames in view), ``false_alarm_rate,
         fpr95, alarm_rate`` and ``notes`` (why a measure is NaN; "" when none is).
     """
@@ -360,14 +363,15 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
     if not hazard.any():
         notes.append("no hazard frame: no AUROC, AUPRC, hit rate or FPR@95TPR")
     elif not in_view.any():
-        notes.append("no hazard frame in view: no hit rate in view")
+        notes.append("no hazard frame in view: no hit rate or AUROC in view")
     if hazard.all():
-        notes.append("only hazard frames: no AUROC, false-alarm rate or FPR@95TPR")
+        notes.append("only hazard frames: no AUROC (nor in view), false-alarm rate or FPR@95TPR")
     core = core_measures(risk, target, hazard, reference, threshold)
     return {
         "frames": int(risk.size), "targets": int(has.sum()), "hazards": int(hazard.sum()),
         "pearson": core["pearson"], "spearman": spearman(risk[has], target[has]),
         "rmse": core["rmse"], "skill": core["skill"], "auroc": core["auroc"],
+        "auroc_in_view": auroc(risk[in_view | ~hazard], in_view[in_view | ~hazard]),
         "auprc": auprc(risk, hazard) if risk.size else float("nan"),
         "hit_rate": core["hit_rate"],
         "hit_in_view": float(np.mean(risk[in_view] > threshold)) if in_view.any() else float("nan"),

@@ -233,18 +233,28 @@ def test_risk_quality_on_a_small_table():
     # alarms (> 0.5): both hazards; non-hazards 0.6 only -> 1/3
     assert q["hit_rate"] == 1.0 and q["false_alarm_rate"] == pytest.approx(1 / 3)
     assert q["hit_in_view"] == 1.0  # the one hazard frame in view, 0.8
+    assert q["auroc_in_view"] == 1.0  # 0.8 over the non-hazards 0.3, 0.0, 0.6
     assert q["alarm_rate"] == pytest.approx(3 / 5)
     assert q["notes"] == ""
 
 
-def test_the_hit_rate_in_view_counts_the_hazard_frames_in_view_alone():
+def test_the_hit_rate_and_auroc_in_view_count_the_hazard_frames_in_view_alone():
     truth = [_truth(0.5, True, in_view=True), _truth(0.5, True, in_view=True),
-             _truth(0.5, True, in_view=True), _truth(0.5, True), _truth(0.1, False)]
-    q = risk_quality([0.7, 0.4, 0.9, 0.2, 0.3], truth, reference=0.5, threshold=0.5)
+             _truth(0.5, True, in_view=True), _truth(0.5, True), _truth(0.1, False), _truth(0.1, False)]
+    q = risk_quality([0.7, 0.25, 0.9, 0.2, 0.3, 0.1], truth, reference=0.5, threshold=0.5)
     # alarms (> 0.5) on 0.7 and 0.9: 2 of the 3 in view, 2 of the 4 hazard frames
     assert q["hit_in_view"] == pytest.approx(2 / 3) and q["hit_rate"] == pytest.approx(2 / 4)
+    # in view against the hazard-free 0.3 and 0.1: 0.7 and 0.9 beat both, 0.25 beats 0.1: 5 of
+    # 6 pairs; the frame out of view, 0.2, beats 0.1 only: 1 of 2. Over all hazard frames 6 of
+    # 8 pairs, the in-view share 3 / 4 times 5 / 6 plus 1 / 4 times 1 / 2
+    assert q["auroc_in_view"] == pytest.approx(5 / 6)
+    assert q["auroc"] == pytest.approx(6 / 8) == pytest.approx(3 / 4 * 5 / 6 + 1 / 4 * 1 / 2)
     q = risk_quality([0.7, 0.2], [_truth(0.5, True), _truth(0.1, False)], reference=0.5, threshold=0.5)
-    assert math.isnan(q["hit_in_view"]) and "no hazard frame in view" in q["notes"]
+    assert math.isnan(q["hit_in_view"]) and math.isnan(q["auroc_in_view"])
+    assert "no hazard frame in view: no hit rate or AUROC in view" in q["notes"]
+    q = risk_quality([0.7, 0.2], [_truth(0.5, True, in_view=True), _truth(0.5, True)], reference=0.5,
+                     threshold=0.5)
+    assert math.isnan(q["auroc_in_view"]) and "only hazard frames: no AUROC (nor in view)" in q["notes"]
 
 
 def test_risk_quality_says_why_a_measure_is_undefined():
