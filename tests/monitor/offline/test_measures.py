@@ -248,7 +248,7 @@ def test_the_hit_rate_and_auroc_in_view_count_the_hazard_frames_in_view_alone():
     # 6 pairs; the frame out of view, 0.2, beats 0.1 only: 1 of 2. Over all hazard frames 6 of
     # 8 pairs, the in-view share 3 / 4 times 5 / 6 plus 1 / 4 times 1 / 2
     assert q["auroc_in_view"] == pytest.approx(5 / 6)
-    assert q["auroc"] == pytest.approx(6 / 8) == pytest.approx(3 / 4 * 5 / 6 + 1 / 4 * 1 / 2)
+    assert q["auroc"] == pytest.approx(6 / 8) and 6 / 8 == pytest.approx(3 / 4 * 5 / 6 + 1 / 4 * 1 / 2)
     q = risk_quality([0.7, 0.2], [_truth(0.5, True), _truth(0.1, False)], reference=0.5, threshold=0.5)
     assert math.isnan(q["hit_in_view"]) and math.isnan(q["auroc_in_view"])
     assert "no hazard frame in view: no hit rate or AUROC in view" in q["notes"]
