@@ -388,6 +388,104 @@ def clear_structure(xs, ys, tall, x0, y0, cell, marks, obstacle, corridor):
 
 
 @kernel
+def standing(labels, index, corridor, xs, ys, zs, ds, plane, floor, top, x0, y0, cell, low, high,
+             min_rise, side_percentile, row0, row1):
+    """Per chosen component: where its part that rises from the road stands.
+
+    Every valid block (``ds`` > 0) whose height above the road ``plane`` (float64 (3,),
+    ``z = a x + b y + c``) is within ``[floor, top]`` widens the height range of the cell
+    of its ground position on the (nx, ny) grid of :func:`label_objects` (``low`` and
+    ``high`` float32 (nx, ny) scratch; blocks off the grid are left out). A block of a
+    component *rises* when the cell of its ground position or one of its 8 neighbours (the
+    scatter of a depth estimate's error) holds heights ``min_rise`` or more apart.
+    ``labels`` int32, ``corridor`` uint8 and ``xs, ys, zs, ds`` float32 (rows, cols);
+    ``index`` int64 (n,) maps a component to its row of the result (-1: not wanted), whose
+    blocks all lie in the block rows ``row0`` to ``row1`` (inclusive).
+
+    Returns float64 (k, 3), k = ``index.max() + 1``, rows ``x, y_low, y_high``: the
+    smallest ego x of the component's rising blocks inside the corridor, and the
+    ``side_percentile`` and ``100 - side_percentile`` of its rising blocks' ego y. A
+    component with no rising block inside the corridor takes ``x`` over all its blocks
+    inside it (inf if none), one with no rising block ``y_low, y_high`` over all its blocks,
+    as :func:`object_stats` gives them; NaN rows for components without blocks.
+    """
+    rows, cols = ds.shape
+    nx, ny = low.shape
+    a, b, c = plane[0], plane[1], plane[2]
+    low[:, :] = np.inf
+    high[:, :] = -np.inf
+    for r in range(rows):
+        for col in range(cols):
+            if not ds[r, col] > 0.0:
+                continue
+            h = zs[r, col] - (a * xs[r, col] + b * ys[r, col] + c)
+            fi = math.floor((xs[r, col] - x0) / cell)
+            fj = math.floor((ys[r, col] - y0) / cell)
+            if floor <= h <= top and 0 <= fi < nx and 0 <= fj < ny:
+                i, j = int(fi), int(fj)
+                low[i, j] = min(low[i, j], h)
+                high[i, j] = max(high[i, j], h)
+    # high: 1 where a cell's heights span min_rise; low: 1 where one of the 3 x 3 cells does
+    for i in range(nx):
+        for j in range(ny):
+            high[i, j] = 1.0 if high[i, j] - low[i, j] >= min_rise else 0.0
+    for i in range(nx):
+        for j in range(ny):
+            low[i, j] = 0.0
+            for ii in range(max(i - 1, 0), min(i + 2, nx)):
+                for jj in range(max(j - 1, 0), min(j + 2, ny)):
+                    if high[ii, jj] > 0.0:
+                        low[i, j] = 1.0
+    k = 0
+    for m in range(index.shape[0]):
+        k = max(k, index[m] + 1)
+    counts = np.zeros((k, 2), dtype=np.int64)  # blocks, rising blocks
+    x_all = np.full(k, np.inf)
+    x_up = np.full(k, np.inf)
+    band = max(row1 - row0 + 1, 0)
+    up = np.zeros((band, cols), dtype=np.uint8)
+    for r in range(row0, row0 + band):
+        for col in range(cols):
+            m = labels[r, col]
+            if m < 0 or index[m] < 0:
+                continue
+            j = index[m]
+            fi = math.floor((xs[r, col] - x0) / cell)
+            fj = math.floor((ys[r, col] - y0) / cell)
+            if 0 <= fi < nx and 0 <= fj < ny and low[int(fi), int(fj)] > 0.0:
+                up[r - row0, col] = 1
+            counts[j, 0] += 1
+            counts[j, 1] += up[r - row0, col]
+            if corridor[r, col]:
+                x_all[j] = min(x_all[j], float(xs[r, col]))
+                if up[r - row0, col]:
+                    x_up[j] = min(x_up[j], float(xs[r, col]))
+    # the lateral positions of each component's rising blocks, or of all of them if none rise
+    start = np.zeros(k + 1, dtype=np.int64)
+    for j in range(k):
+        start[j + 1] = start[j] + (counts[j, 1] if counts[j, 1] > 0 else counts[j, 0])
+    sides = np.empty(start[k], dtype=np.float64)
+    fill = start[:k].copy()
+    for r in range(row0, row0 + band):
+        for col in range(cols):
+            m = labels[r, col]
+            if m < 0 or index[m] < 0:
+                continue
+            j = index[m]
+            if up[r - row0, col] or counts[j, 1] == 0:
+                sides[fill[j]] = ys[r, col]
+                fill[j] += 1
+    out = np.full((k, 3), np.nan)
+    for j in range(k):
+        if counts[j, 0] == 0:
+            continue
+        out[j, 0] = x_up[j] if x_up[j] < np.inf else x_all[j]
+        out[j, 1] = _percentile(sides[start[j]:start[j + 1]], side_percentile)
+        out[j, 2] = _percentile(sides[start[j]:start[j + 1]], 100.0 - side_percentile)
+    return out
+
+
+@kernel
 def _percentile(values, percentile):
     """The ``percentile`` (0..100, linear interpolation as numpy's default) of a non-empty
     1-D array, by selection (O(size)); reorders ``values``."""

@@ -78,6 +78,16 @@ in the manner of the stereo-vision obstacle detectors:
    that is dropped (off when ``ledge_height`` is None). Debris is as low but wider, or as
    long as it is wide; a kerb on a curve spans more across than a straight one, and then
    the rule leaves it in.
+8. **Where an object stands is where it rises.** An upright face puts points of many
+   heights on one place of the ground (the stixel world's column of one depth); a surface
+   read above the road (a patch of road read too near, the road beside a car blended into
+   it) puts one height on each place. The grid groups such a surface with the car or the
+   truck it touches, and the patch, metres nearer or reaching into the ego's path, would
+   move where the object stands. So an object's ``extents`` come from its blocks that
+   *rise*: those whose ground cell, or one of the 8 around it, holds points ``min_rise``
+   metres or more apart in height, counting the points from half of ``min_height`` up (the
+   foot of a face, not the road). An object of which no block rises keeps the extents of
+   all its blocks: a flat object is still an object (off when ``min_rise`` is None).
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -252,6 +262,10 @@ class GeometricParams:
         ledge_height <= max_height``), whose lateral span is under ``ledge_width`` metres
         (> 0) and which reaches along the road more than ``LEDGE_ELONGATION`` times that is a
         ledge along the road, a kerb (module, rule 7); ``ledge_height`` None: the rule is off.
+    min_rise : float or None
+        Metres (> 0): a block rises when the points of its ground cell, or of a neighbour,
+        span this much in height, and an object's ``extents`` come from its blocks that
+        rise (module, rule 8); None: from all its blocks.
     """
 
     stride: int = 4
@@ -282,6 +296,7 @@ class GeometricParams:
     min_occlusion: float | None = 0.25
     ledge_height: float | None = 0.3
     ledge_width: float = 0.4
+    min_rise: float | None = 0.15
 
     def __post_init__(self):
         for name, low in (("stride", 1), ("min_points", 1), ("ransac_iterations", 1),
@@ -333,6 +348,11 @@ class GeometricParams:
         if not (isinstance(width, (int, float)) and not isinstance(width, bool) and math.isfinite(width)
                 and width > 0):
             raise ValueError(f"ledge_width = {width!r}, must be a finite number of metres > 0")
+        rise = self.min_rise
+        if rise is not None and not (isinstance(rise, (int, float)) and not isinstance(rise, bool)
+                                     and math.isfinite(rise) and rise > 0):
+            raise ValueError(f"min_rise = {rise!r}, must be a finite number of metres > 0, or None "
+                             "(extents from all of an object's blocks)")
         occlusion = self.min_occlusion
         if occlusion is not None and not (isinstance(occlusion, (int, float)) and not isinstance(occlusion, bool)
                                           and 0 <= occlusion <= 1):
@@ -352,7 +372,8 @@ class GeometricView:
         Where each object stands in the ego frame, from its blocks: ``x`` its nearest
         corridor block's ego x, ``y_min, y_max`` the ``depth_percentile`` and the
         ``100 - depth_percentile`` percentile of its blocks' ego y (as robust to stray blocks
-        as its depth), metres; rows as ``boxes``.
+        as its depth), metres; rows as ``boxes``. With ``min_rise``, from its blocks that
+        rise where it has any (the module's rule 8).
     free_distance : float
         Ego x (metres, from the ego origin) of the nearest obstacle block of an object
         inside the corridor; inf when no object is there within ``max_range``.
@@ -463,6 +484,8 @@ class GeometricRetriever:
             local.labels = np.empty((rows, cols), dtype=np.int32)
             local.candidates = np.empty(rows * cols, dtype=np.int64)
             local.grid = np.empty(self._grid_shape, dtype=np.int32)
+            local.low = np.empty(self._grid_shape, dtype=np.float32)  # heights per cell (rule 8)
+            local.high = np.empty(self._grid_shape, dtype=np.float32)
             local.grid_ids = np.empty(self._grid_shape, dtype=np.int32)
         return local
 
@@ -547,9 +570,18 @@ class GeometricRetriever:
         if keep.any():
             keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground)
         order = np.argsort(boxes[keep, 4], kind="stable")
+        extents = stats[keep][:, [6, 8, 9]]
+        if params.min_rise is not None and keep.any():
+            index = np.full(keep.size, -1, dtype=np.int64)
+            index[keep] = np.arange(extents.shape[0])
+            extents = kernels.standing(scratch.labels, index, scratch.corridor, xs, ys, zs, ds,
+                                       np.array(ground, dtype=np.float64), 0.5 * params.min_height,
+                                       params.max_height, *self._grid_origin, params.cell_size,
+                                       scratch.low, scratch.high, params.min_rise, params.depth_percentile,
+                                       int(stats[keep, 0].min()), int(stats[keep, 1].max()))
         return GeometricView(
             boxes=boxes[keep][order],
-            extents=stats[keep][order][:, [6, 8, 9]],
+            extents=extents[order],
             free_distance=float(stats[keep, 6].min()) if keep.any() else math.inf,
             ground=np.array(ground, dtype=np.float64),
             ground_fitted=support > 0,

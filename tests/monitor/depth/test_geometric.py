@@ -243,6 +243,41 @@ def test_what_stands_hides_what_is_behind_it_and_is_kept():
         assert _match(ruled, _truth(labels, depth, 0))[1] > 0.3
 
 
+def test_where_an_object_stands_is_where_it_rises():
+    # a car beside the path (its near side at y = -2.03 m, its rear 10 m ahead of the ego
+    # origin) and, beside it towards the path, a patch of road 12-14 m ahead read 20 % too
+    # near: it lies 0.3 m above the road at 9.6-11.2 m, next to the car on the grid, which
+    # groups the two. The patch would bring the car into the path (y up to -0.86 m); where
+    # the car stands is where it rises, as on the clean frame
+    car = [12.3, -3.0, 0.865, 1.95, 4.6, 1.73, 0.0]
+    depth, labels = _render([car])
+    rows, cols = np.mgrid[0:depth.shape[0], 0:depth.shape[1]] + 0.5
+    rays = np.linalg.inv(CAMERA.K) @ np.stack([cols.ravel(), rows.ravel(), np.ones(rows.size)])
+    ego = CAMERA.cam_to_ego[:3, :3] @ (rays * depth.ravel()) + CAMERA.cam_to_ego[:3, 3:4]
+    x, y = (a.reshape(depth.shape) for a in ego[:2])
+    patch = (labels == 0) & (x > 12.0) & (x < 14.0) & (y > -2.6) & (y < 0.3)
+    read = depth.copy()
+    read[patch] *= np.float32(0.8)
+    clean = GeometricRetriever(CAMERA).view(depth)
+    grouped = GeometricRetriever(CAMERA).view(read)
+    plain = GeometricRetriever(CAMERA, GeometricParams(min_rise=None)).view(read)
+    assert clean.extents.shape == grouped.extents.shape == plain.extents.shape == (1, 3)
+    assert grouped.boxes[0, 2] > 1.5 * clean.boxes[0, 2]  # one object, the patch's pixels in its box
+    assert plain.extents[0, 2] > -1.0  # without the rule: into the path
+    np.testing.assert_allclose(grouped.extents, clean.extents, atol=0.05)
+    assert clean.extents[0, 0] == pytest.approx(10.0, abs=0.1)
+    assert clean.extents[0, 2] == pytest.approx(-3.0 + 1.95 / 2, abs=0.05)
+    # what rises nowhere keeps the extents of all its blocks: the floating blob of the test
+    # above, without the rules that drop it
+    road, _ = _render([])
+    blob = road.copy()
+    blob[680:760, 700:900] *= np.float32(0.5)
+    off = GeometricParams(max_incline=None, min_occlusion=None)
+    flat = GeometricRetriever(CAMERA, off).view(blob)
+    np.testing.assert_array_equal(flat.extents,
+                                  GeometricRetriever(CAMERA, replace(off, min_rise=None)).view(blob).extents)
+
+
 def test_occlusion_by_hand():
     rows, cols, stride = 8, 5, 4
     q0, qu, qv = -0.05, 0.0, 0.01   # the road's inverse depth 0.01 / m more per pixel down
@@ -679,6 +714,53 @@ def test_object_stats_equals_numpy():
     assert np.isnan(stats[5, 7:]).all()
 
 
+def test_standing_equals_numpy():
+    rng = np.random.default_rng(10)
+    rows, cols, cell, x0, y0 = 20, 30, 0.5, 2.0, -8.0
+    labels = rng.integers(-1, 6, (rows, cols)).astype(np.int32)
+    xs = rng.uniform(2.0, 9.0, (rows, cols)).astype(np.float32)
+    ys = rng.uniform(-8.0, 8.0, (rows, cols)).astype(np.float32)
+    zs = rng.uniform(-0.2, 1.0, (rows, cols)).astype(np.float32)
+    flat = labels == 2  # component 2: a flat patch, alone on its part of the grid
+    xs[flat] = rng.uniform(10.5, 11.5, int(flat.sum()))
+    zs[flat] = 0.4 + 0.01 * rng.random(int(flat.sum()))
+    ds = rng.uniform(2.0, 20.0, (rows, cols)).astype(np.float32)
+    ds[rng.random((rows, cols)) < 0.1] = np.nan  # invalid blocks count for no cell
+    corridor = (rng.random((rows, cols)) < 0.5).astype(np.uint8)
+    corridor[labels == 3] = 0  # component 3 lies outside the corridor
+    plane = np.array([0.01, -0.02, 0.05])
+    index = np.array([0, 1, 2, 3, -1, 4])  # component 4 not wanted
+    nx, ny = 20, 32
+    low, high = np.empty((nx, ny), np.float32), np.empty((nx, ny), np.float32)
+    out = kernels.standing(labels, index, corridor, xs, ys, zs, ds, plane, 0.1, 0.9, x0, y0, cell,
+                           low, high, 0.3, 10.0, 0, rows - 1)
+    # by NumPy: each cell's range of heights in [0.1, 0.9]; a block rises when a cell of its
+    # 3 x 3 neighbourhood spans 0.3 m or more
+    h = zs.astype(np.float64) - (0.01 * xs - 0.02 * ys + 0.05)
+    gi, gj = np.floor((xs - x0) / cell).astype(int), np.floor((ys - y0) / cell).astype(int)
+    span = np.full((nx, ny), -np.inf)
+    counted = (ds > 0) & (h >= 0.1) & (h <= 0.9)
+    for i in range(nx):
+        for j in range(ny):
+            here = counted & (gi == i) & (gj == j)
+            if here.any():
+                span[i, j] = h[here].max() - h[here].min()
+    rises = np.zeros((rows, cols), bool)
+    for r in range(rows):
+        for c in range(cols):
+            i, j = gi[r, c], gj[r, c]
+            rises[r, c] = (span[max(i - 1, 0):i + 2, max(j - 1, 0):j + 2] >= 0.3).any()
+    assert out.shape == (5, 3)
+    for m in (0, 1, 2, 3, 5):
+        mine = labels == m
+        up = mine & rises
+        inside_up, inside = up & (corridor > 0), mine & (corridor > 0)
+        x = xs[inside_up].min() if inside_up.any() else xs[inside].min() if inside.any() else np.inf
+        side = ys[up if up.any() else mine].astype(np.float64)
+        np.testing.assert_allclose(out[index[m]], [x, *np.percentile(side, [10.0, 90.0])], rtol=1e-12)
+    assert not rises[flat].any() and rises[labels == 0].any() and np.isinf(out[3, 0])
+
+
 def test_ledge_shape_equals_numpy():
     rng = np.random.default_rng(9)
     labels = rng.integers(-1, 6, (20, 30)).astype(np.int32)
@@ -743,6 +825,8 @@ def test_surface_shape_equals_numpy():
     ("ledge_height", 0.2, r"ledge_height = 0.2, must be metres above the road over min_height = 0.2"),
     ("ledge_height", True, "ledge_height = True"),
     ("ledge_width", 0.0, "ledge_width = 0.0, must be a finite number of metres > 0"),
+    ("min_rise", 0.0, r"min_rise = 0.0, must be a finite number of metres > 0, or None"),
+    ("min_rise", True, "min_rise = True"),
 ])
 def test_params_are_validated(field, value, text):
     with pytest.raises(ValueError, match=text):
