@@ -759,6 +759,14 @@ def test_standing_equals_numpy():
         side = ys[up if up.any() else mine].astype(np.float64)
         np.testing.assert_allclose(out[index[m]], [x, *np.percentile(side, [10.0, 90.0])], rtol=1e-12)
     assert not rises[flat].any() and rises[labels == 0].any() and np.isinf(out[3, 0])
+    # objects in rows 5-14 only: their rows are all the kernel needs to look at
+    band = labels.copy()
+    band[:5], band[15:] = -1, -1
+    whole = kernels.standing(band, index, corridor, xs, ys, zs, ds, plane, 0.1, 0.9, x0, y0, cell,
+                             low, high, 0.3, 10.0, 0, rows - 1)
+    np.testing.assert_array_equal(kernels.standing(band, index, corridor, xs, ys, zs, ds, plane, 0.1,
+                                                   0.9, x0, y0, cell, low, high, 0.3, 10.0, 5, 14), whole)
+    assert np.isfinite(whole[:, 1]).all()
 
 
 def test_ledge_shape_equals_numpy():
