@@ -274,6 +274,7 @@ def test_where_an_object_stands_is_where_it_rises():
     blob[680:760, 700:900] *= np.float32(0.5)
     off = GeometricParams(max_incline=None, min_occlusion=None)
     flat = GeometricRetriever(CAMERA, off).view(blob)
+    assert flat.extents.shape == (1, 3)  # one object, 0.75 m above the road, that rises nowhere
     np.testing.assert_array_equal(flat.extents,
                                   GeometricRetriever(CAMERA, replace(off, min_rise=None)).view(blob).extents)
 
