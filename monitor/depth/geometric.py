@@ -54,11 +54,15 @@ in the manner of the stereo-vision obstacle detectors:
    over its blocks' rows) and that touches the road, or something in front of it, in fewer
    than ``min_contact`` of its columns is dropped. Both tests are needed: the top of a low
    box (debris) lies along the road but stands on it, and the raised rear of a trailer has
-   the road beneath it but is upright (off when ``max_incline`` is None). Where nothing
-   valid lies beneath an object (the image's bottom edge cuts it, or the depth below is
-   invalid) contact cannot be told: such an object is dropped when its inverse depth grows
-   more than ``UNSUPPORTED_INCLINE`` times as fast as the road's, faster than the top of any
-   low obstacle; an upright face (near 0) or the top of debris is kept.
+   the road beneath it but is upright (off when ``max_incline`` is None). What stands on
+   the road meets it along its whole width; a patch read too near touches it only where
+   the network smears its edge into the road, so ``min_contact`` asks for nine columns in
+   ten, and an upright face is kept whatever its contact (a pedestrian's legs, a car's
+   clearance). Where nothing valid lies beneath an object (the image's bottom edge cuts
+   it, or the depth below is invalid) contact cannot be told: such an object is dropped
+   when its inverse depth grows more than ``UNSUPPORTED_INCLINE`` times as fast as the
+   road's, faster than the top of any low obstacle; an upright face (near 0) or the top of
+   debris is kept.
 6. **What hides nothing is no object.** What stands on the road hides what is behind it:
    right above its top the image sees the road far beyond it, the sky, or something
    standing behind it. A patch of road that the depth reads a little too near over a wide
@@ -292,7 +296,7 @@ class GeometricParams:
     seed: int = 0
     structure_height: float | None = 4.2
     max_incline: float | None = 0.5
-    min_contact: float = 0.35
+    min_contact: float = 0.9
     min_occlusion: float | None = 0.25
     ledge_height: float | None = 0.3
     ledge_width: float = 0.4

@@ -190,6 +190,24 @@ def test_a_patch_of_road_read_too_near_floats_and_is_no_object_what_stands_stays
         assert _match(ruled, _truth(labels, depth, k))[1] > 0.3  # debris: its top 0.1 m only
 
 
+def test_a_patch_whose_edge_is_smeared_into_the_road_in_places_still_floats():
+    # the network smears the bottom edge of a patch read at 0.6-0.7 of the road's depth into
+    # the road beneath it over part of its width: a skirt, its log depth running from the
+    # patch's to the road's over 24 rows, under the first 80 or 140 of its 200 columns
+    road, _ = _render([])
+    for factor in (0.6, 0.7):
+        for end in (780, 840):
+            blob = road.copy()
+            blob[680:760, 700:900] *= np.float32(factor)
+            w = (np.arange(760, 784)[:, None] - 759) / 25.0
+            blob[760:784, 700:end] = np.exp((1 - w) * np.log(blob[759, 700:end])
+                                            + w * np.log(road[784, 700:end]))
+            # the skirt touches the road: with contact asked of 0.35 of the columns it stays
+            assert GeometricRetriever(CAMERA, GeometricParams(min_contact=0.35))(blob).shape == (1, 5)
+            # it lies along the road and touches it in under 9 columns of 10: no object
+            assert GeometricRetriever(CAMERA)(blob).shape == (0, 5)
+
+
 def test_at_the_image_bottom_a_patch_read_too_near_floats_what_stands_stays():
     # the bottom row sees the road 6.3 m ahead of the ego origin (2.5 m ahead of the bumper):
     # nothing lies beneath what the bottom edge cuts, so contact cannot be told
