@@ -231,6 +231,13 @@ class ShieldConfig:
         row); what stands nearer reaches into the image's bottom rows, where the depth view
         cannot see the road beneath it, and a standing obstacle there was in view in the
         frame before. None: no such zone.
+    memory : float > 0 or None
+        With a path gate, seconds the shield remembers where the unseen objects that engaged
+        it stand (on the road, the ego's travel allowed for). An unseen object seen where a
+        remembered one stands (:func:`monitor.shield.consistent`) renews it there; once
+        sighted again, a remembered object that lies in the path within reach keeps the
+        shield engaged (or engages it again) whatever the frame shows. One not sighted for
+        this long is forgotten. None: no memory, the hold alone keeps the shield engaged.
     """
 
     threshold: float = 0.5
@@ -246,6 +253,7 @@ class ShieldConfig:
     confirm_width: float | None = 0.3
     emergency: float | None = 6.0
     confirm_near: float | None = 2.5
+    memory: float | None = 1.0
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -288,6 +296,11 @@ class ShieldConfig:
                 raise ValueError(f"emergency = {self.emergency!r}, must be > deceleration = {deceleration:g} "
                                  "m/s^2 (or null: one stage)")
             _set(self, "emergency", emergency)
+        if self.memory is not None:
+            memory = _number(self.memory, "memory")
+            if not (math.isfinite(memory) and memory > 0):
+                raise ValueError(f"memory = {self.memory!r}, must be > 0 seconds (or null: no memory)")
+            _set(self, "memory", memory)
 
 
 @dataclass(frozen=True)

@@ -48,6 +48,18 @@ was in view a frame before, and one stepping in from the side was seen beside th
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
 car anyway.
 
+With ``memory`` the gate remembers where the unseen objects that engaged it stand, on the
+road (the ego's travel, integrated from its speed, taken off their distance), for
+``memory`` seconds after each was last sighted. An unseen object seen where a remembered one
+stands, as :func:`consistent` tells, renews it at that place, so a remembered pedestrian
+walking out of the path takes the memory with her. A remembered object sighted again keeps
+the shield engaged while it lies in the path within reach, at the deceleration its distance
+calls for, whatever the frame's risk, and engages it again when the car, moving on, brings it
+back within reach. A dark obstacle that the depth view shows in one frame in three is so
+braked for through the frames it misses, and the car that stopped short of it does not
+creep into it after the hold; an artefact in a new place each frame is sighted once and
+left to the hold.
+
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
 """
@@ -93,6 +105,8 @@ def describe_shield(config: ShieldConfig) -> str:
         parts.append(f"{which} confirmed in {config.confirm_frames} of {config.confirm_window} frames")
     if config.path_half_width is not None and config.emergency is not None:
         parts.append(f"emergency {config.emergency:g} m/s^2")
+    if config.path_half_width is not None and config.memory is not None:
+        parts.append(f"objects remembered {config.memory:g} s")
     return ", ".join(parts)
 
 
@@ -135,6 +149,11 @@ class Shield:
         self._since_trigger = 0
         self._decel = self.config.deceleration  # requested while engaged: the last trigger's
         self._history = deque(maxlen=self.config.confirm_window - 1)  # (time, unseen) of past frames
+        self._odometer = 0.0  # metres the ego travelled (speed times the frames' intervals)
+        self._time = None  # the last frame's time
+        # remembered objects: x, y_min, y_max where last sighted, its time, the odometer then,
+        # the number of sightings
+        self._memory = np.zeros((0, 6))
 
     def reach(self, speed: float, deceleration: float | None = None) -> float:
         """Metres ahead of the front bumper in which an unseen object counts at ``speed``
@@ -166,22 +185,31 @@ class Shield:
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        decel = c.deceleration if c.path_half_width is None else self._in_path(speed, unseen, time)
+        decel, kept = c.deceleration, 0.0
+        if c.path_half_width is not None:
+            decel, kept = self._in_path(speed, unseen, time, risk > c.threshold)
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
             self._decel = max(decel, c.deceleration)
         elif self.engaged:
             self._since_trigger += 1
-            if (risk <= c.release or decel == 0.0) and self._since_trigger > c.hold_frames:
+            if kept > 0.0:
+                self._decel = max(self._decel, kept)
+            elif (risk <= c.release or decel == 0.0) and self._since_trigger > c.hold_frames:
                 self.engaged = False
+        elif kept > 0.0:  # a remembered object came within reach again: no new hold
+            self.engaged, self._since_trigger, self._decel = True, c.hold_frames, kept
         return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk)
 
-    def _in_path(self, speed, unseen, time) -> float:
+    def _in_path(self, speed, unseen, time, triggers: bool) -> tuple[float, float]:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
         ``confirm_width``, with ``emergency`` one beyond the emergency reach, and one within
-        ``confirm_near`` of the bumper count only once confirmed."""
+        ``confirm_near`` of the bumper count only once confirmed. Second, with a memory,
+        the deceleration the remembered objects call for where they stand now (0.0
+        without); the counting objects of a frame that ``triggers`` (its risk above the
+        threshold) are remembered."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
@@ -192,13 +220,18 @@ class Shield:
             if unseen.ndim != 2 or unseen.shape[1] != 3 or not np.isfinite(unseen).all():
                 raise ValueError(f"unseen has shape {unseen.shape}: expected finite (k, 3) rows "
                                  "x, y_min, y_max (RiskReport.unseen)")
-        if c.confirm_frames > 1:
+        if c.confirm_frames > 1 or c.memory is not None:
             if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time) \
-                    or (self._history and not time > self._history[-1][0]):
-                last = f" (the last frame's was {self._history[-1][0]!r})" if self._history else ""
+                    or (self._time is not None and not time > self._time):
+                last = f" (the last frame's was {self._time!r})" if self._time is not None else ""
                 raise ValueError(f"time = {time!r}{last}: a shield whose gate confirms (confirm_frames > 1) "
-                                 "needs each frame's time, finite seconds, increasing")
+                                 "or remembers (memory) needs each frame's time, finite seconds, increasing")
             time = float(time)
+            if self._time is not None:
+                self._odometer += float(speed) * (time - self._time)
+            self._time = time
+        if c.memory is not None:  # forget what was not sighted for too long
+            self._memory = self._memory[time - self._memory[:, 3] <= c.memory]
         if unseen is None:
             decel = c.deceleration
         else:
@@ -222,10 +255,46 @@ class Shield:
                         hits += consistent(near, then, time - t, speed)
                     unconfirmed &= hits < c.confirm_frames - 1
             counts = ~unconfirmed
+            if c.memory is not None:
+                self._renew(unseen, time)
+                if triggers:
+                    self._remember(near[counts], time)
             decel = c.emergency if np.any(counts & urgent) else c.deceleration if counts.any() else 0.0
         if c.confirm_frames > 1:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
-        return decel
+        return decel, (0.0 if c.memory is None else self._remembered(float(speed)))
+
+    def _renew(self, sightings: np.ndarray, time: float) -> None:
+        """Renew each remembered object that one of ``sightings`` (k, 3) stands where it
+        stands (the ego's travel since it was sighted allowed for), at that sighting."""
+        for row in self._memory:
+            dt = time - row[3]
+            match = np.flatnonzero(consistent(sightings, row[None, :3], dt, (self._odometer - row[4]) / dt))
+            if match.size:
+                row[:] = (*sightings[match[0]], time, self._odometer, row[5] + 1)
+
+    def _remember(self, objects: np.ndarray, time: float) -> None:
+        """Remember ``objects`` (k, 3), sighted at ``time``, but those that renewed a
+        remembered object."""
+        fresh = self._memory[:, 3] == time
+        new = objects[~consistent(objects, self._memory[fresh, :3], 0.0, 0.0)] if fresh.any() else objects
+        rows = np.column_stack([new, np.full(len(new), time), np.full(len(new), self._odometer),
+                                np.ones(len(new))])
+        self._memory = np.vstack([self._memory, rows])
+
+    def _remembered(self, speed: float) -> float:
+        """The deceleration the remembered objects sighted more than once call for where they
+        stand now (the ego's travel since each was sighted taken off its distance): as for a
+        counting unseen object; those now behind the bumper are forgotten."""
+        c = self.config
+        x = self._memory[:, 0] - (self._odometer - self._memory[:, 4])
+        self._memory = self._memory[x >= c.front]
+        x = x[x >= c.front]
+        inside = (self._memory[:, 2] >= -c.path_half_width) & (self._memory[:, 1] <= c.path_half_width)
+        ahead = x[inside & (self._memory[:, 5] > 1)] - c.front
+        if c.emergency is not None and np.any(ahead <= self.reach(speed, c.emergency)):
+            return c.emergency
+        return c.deceleration if np.any(ahead <= self.reach(speed)) else 0.0
 
 
 #: Metres of depth error ``consistent`` allows along the line of sight, at any distance.

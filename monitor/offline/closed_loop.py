@@ -275,8 +275,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
-    `` n{confirm_near}`` when every object near the bumper is), and `` e{emergency}`` for
-    a gate with an emergency stage."""
+    `` n{confirm_near}`` when every object near the bumper is), `` e{emergency}`` for
+    a gate with an emergency stage and `` m{memory}`` for one that remembers."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
@@ -288,6 +288,8 @@ def driver_label(config: ShieldConfig | None) -> str:
                 gate += f" n{config.confirm_near:g}"
     if config.path_half_width is not None and config.emergency is not None:
         gate += f" e{config.emergency:g}"
+    if config.path_half_width is not None and config.memory is not None:
+        gate += f" m{config.memory:g}"
     return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 

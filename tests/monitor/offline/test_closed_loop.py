@@ -269,7 +269,7 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
-    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 e6")
+    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 e6 m1")
     # a hazard-free drive with the blind detector: the risk is the rule base's worst whenever
     # traffic is in view. The paper's shield brakes in every frame and never arrives; the
     # gated one brakes only while something stands in the path within reach (a quarter of
