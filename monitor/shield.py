@@ -265,8 +265,8 @@ class Shield:
         return decel, (0.0 if c.memory is None else self._remembered(float(speed)))
 
     def _renew(self, sightings: np.ndarray, time: float) -> None:
-        """Renew each remembered object that one of ``sightings`` (k, 3) stands where it
-        stands (the ego's travel since it was sighted allowed for), at that sighting."""
+        """Renew, at the sighting, each remembered object where one of ``sightings`` (k, 3)
+        stands (the ego's travel since it was last sighted allowed for)."""
         for row in self._memory:
             dt = time - row[3]
             match = np.flatnonzero(consistent(sightings, row[None, :3], dt, (self._odometer - row[4]) / dt))

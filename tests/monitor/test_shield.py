@@ -365,7 +365,7 @@ def test_a_remembered_object_engages_again_and_is_renewed_by_a_sighting():
               (0.2, 0.2, 0.0, none), (0.3, 0.2, 0.0, none), (0.9, 0.2, 0.0, small), (1.8, 0.2, 1.0, none),
               (2.0, 0.2, 1.0, none)]
     assert _drive(REMEMBERS, frames) == [6.0, 6.0, 6.0, 0.0, 0.0, 6.0, 0.0]
-    # without that sighting the object is forgotten 1 s after the first one
+    # without that sighting the object, sighted once, is left to the hold
     assert _drive(REMEMBERS, frames[:4] + [(0.9, 0.2, 0.0, none)] + frames[5:]) == [6.0, 6.0, 6.0] + [0.0] * 4
     # a sighting elsewhere (1.5 m to the side) renews nothing
     aside = np.array([[3.8 + 3.0, 1.3, 1.5]])
