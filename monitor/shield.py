@@ -2,7 +2,7 @@
 
 The paper's shield starts to decelerate the vehicle whenever the monitor's risk exceeds a
 threshold (0.5); it is ``ShieldConfig(path_half_width=None, hold_frames=0)``. The default
-is path-gated with a 5-frame hold (below; README, closed loop). :class:`Shield` adds two
+is path-gated with a 5-frame hold (below; docs/closed-loop.md). :class:`Shield` adds two
 refinements against chattering on a noisy risk stream:
 
 - hysteresis: once engaged, it stays engaged until the risk falls to ``release`` or below
@@ -43,7 +43,7 @@ Near the bumper (``confirm_near``) every object must be confirmed too. A camera 
 road only from some distance ahead of the bumper on; what stands nearer reaches into the
 image's bottom rows, where the depth view cannot see the road beneath it to tell an
 obstacle from a patch of road read too near (two thirds of the objects the shield braked
-for in hazard-free drives stood there; README, closed loop). A standing obstacle that near
+for in hazard-free drives stood there; docs/closed-loop.md). A standing obstacle that near
 was in view a frame before, and one stepping in from the side was seen beside the path, so
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
 car anyway.

@@ -16,7 +16,7 @@ summed distance over every G, the uncovered ones too, so a G that no prediction 
 take a well-placed prediction from the G it lies on when that shortens the sum. In the
 held-out frames of ``fuzzrisk eval``'s default benchmark it gave 227 of the 6,265 ground
 truths (3.6 %) a USC of 0 although a detection covers them with a USC above 0.8, and it
-moved 9 % of them by more than 0.1 (README, results).
+moved 9 % of them by more than 0.1 (docs/risk-quality.md).
 
 A frame without any G within range has no target: status :data:`NO_TARGETS` and NaN
 ``usc_mean`` / ``target``, never a risk of 0.
