@@ -88,7 +88,8 @@ _QUALITY = [("condition", "condition", "{}"), ("predictor", "predictor", "{}"), 
             ("hazards", "hazards", "{}"), ("pearson", "r", "{:.2f}"), ("spearman", "rho", "{:.2f}"),
             ("rmse", "RMSE", "{:.3f}"), ("skill", "skill", "{:.2f}"), ("auroc", "AUROC", "{:.2f}"),
             ("auprc", "AUPRC", "{:.2f}"), ("hit_rate", "hit", "{:.0%}"),
-            ("false_alarm_rate", "false al.", "{:.0%}"), ("fpr95", "FPR@95", "{:.0%}"),
+            ("false_alarm_rate", "false al.", "{:.0%}"), ("fpr80", "FPR@80", "{:.0%}"),
+            ("fpr95", "FPR@95", "{:.0%}"),
             ("recall", "S recall", "{:.2f}"), ("precision", "S precision", "{:.2f}"),
             ("hazards_in_view", "in view", "{:.0%}")]
 
@@ -192,9 +193,9 @@ def _report(table, quality, rules_path, fis, bench, config, figures, elapsed) ->
         f"> {SYNTHETIC_NOTE}", "",
         "## Quality of the risk", "",
         quality["title"] + ". r, rho: Pearson and Spearman correlation of the risk with the target 1 - USC~; "
-        "skill: 1 - RMSE / RMSE of the constant; hit / false al.: alarms on hazard / other frames; FPR@95: "
-        "false alarms at a 95 % hit rate; S recall / precision: the depth view against the ground truth "
-        "within range (IoG > 0.5 / intersection over S > 0.5, depths within a ratio of 0.8); in view: the "
+        "skill: 1 - RMSE / RMSE of the constant; hit / false al.: alarms on hazard / other frames; FPR@80, "
+        "FPR@95: false alarms at an 80 %, a 95 % hit rate; S recall / precision: the depth view against the "
+        "ground truth within range (IoG > 0.5 / intersection over S > 0.5, depths within a ratio of 0.8); in view: the "
         "share of hazard frames in which the depth view finds a ground truth no detection covers. Every frame "
         "counts, with the risk the monitor reported. '-': undefined on these frames.", "",
         format_table(quality["rows"], _QUALITY, markdown=True), "",

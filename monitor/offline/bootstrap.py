@@ -23,12 +23,12 @@ import numpy as np
 from monitor.offline.measures import FrameTruth, core_measures
 
 #: the measures with an interval of their own (of :func:`monitor.offline.measures.core_measures`)
-INTERVAL_MEASURES = ("pearson", "skill", "auroc", "hit_rate", "false_alarm_rate")
+INTERVAL_MEASURES = ("pearson", "skill", "auroc", "hit_rate", "false_alarm_rate", "fpr80")
 #: the measures whose difference from the reference predictor gets an interval
 PAIRED_MEASURES = ("pearson", "rmse", "auroc")
 #: how the notes name the measures
 NAMES = {"pearson": "r", "rmse": "RMSE", "skill": "skill", "auroc": "AUROC", "hit_rate": "hit rate",
-         "false_alarm_rate": "false-alarm rate"}
+         "false_alarm_rate": "false-alarm rate", "fpr80": "false-alarm rate at an 80 % hit rate"}
 
 
 def scene_draws(scenes: Sequence[str], strata: Sequence[str], draws: int,

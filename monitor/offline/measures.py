@@ -35,8 +35,9 @@ Over frames (:func:`risk_quality` for one predictor's risks, :func:`depth_view_q
   the hit rate and the AUROC on the hazard frames in view alone against the hazard-free
   ones (what the risk makes of the evidence it has: the AUROC over all hazard frames is
   the in-view share times the AUROC in view plus the rest times the AUROC out of view), and
-  the false-positive rate at 95 % true-positive rate (the lowest FPR of any threshold
-  reaching TPR >= 0.95);
+  the false-positive rates at 80 % and 95 % true-positive rate (the lowest FPR of any
+  threshold reaching that TPR: at 80 %, the false alarms at an 80 % hit rate, whatever the
+  shield's threshold);
 - the share of frames per status; the depth view's recall and precision; the share of
   hazard frames in view, the highest hit rate that evidence of the missed objects allows.
 
@@ -316,13 +317,14 @@ def alarm_rates(scores, labels, threshold: float) -> tuple[float, float]:
 def core_measures(risk: np.ndarray, target: np.ndarray, hazard: np.ndarray, reference: float,
                   threshold: float) -> dict:
     """``pearson, rmse, skill`` of the risk against the target on the frames with one, and
-    ``auroc, hit_rate, false_alarm_rate`` for the hazard frames on all (:func:`risk_quality`
-    adds the rest; :mod:`monitor.offline.bootstrap` resamples these)."""
+    ``auroc, hit_rate, false_alarm_rate, fpr80`` for the hazard frames on all
+    (:func:`risk_quality` adds the rest; :mod:`monitor.offline.bootstrap` resamples these)."""
     has = np.isfinite(target)
     hit, false = alarm_rates(risk, hazard, threshold)
     return {"pearson": pearson(risk[has], target[has]), "rmse": rmse(risk[has], target[has]),
             "skill": skill(risk[has], target[has], reference), "auroc": auroc(risk, hazard),
-            "hit_rate": hit, "false_alarm_rate": false}
+            "hit_rate": hit, "false_alarm_rate": false,
+            "fpr80": fpr_at_tpr(risk, hazard, 0.80) if risk.size else float("nan")}
 
 
 # --- tables ------------------------------------------------------------------------------
@@ -346,7 +348,7 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
         ``frames, targets, hazards, pearson, spearman, rmse, skill, auroc, auroc_in_view``
         (the hazard frames in view against the hazard-free ones), ``auprc, hit_rate,
         hit_in_view`` (the hit rate on the hazard frames in view), ``false_alarm_rate,
-        fpr95, alarm_rate`` and ``notes`` (why a measure is NaN; "" when none is).
+        fpr80, fpr95, alarm_rate`` and ``notes`` (why a measure is NaN; "" when none is).
     """
     risk = np.asarray(risk, dtype=np.float64)
     if risk.shape != (len(truth),):
@@ -361,11 +363,11 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
     elif np.ptp(risk[has]) == 0:
         notes.append("constant risk: no correlation")
     if not hazard.any():
-        notes.append("no hazard frame: no AUROC, AUPRC, hit rate or FPR@95TPR")
+        notes.append("no hazard frame: no AUROC, AUPRC, hit rate or FPR at a TPR")
     elif not in_view.any():
         notes.append("no hazard frame in view: no hit rate or AUROC in view")
     if hazard.all():
-        notes.append("only hazard frames: no AUROC (nor in view), false-alarm rate or FPR@95TPR")
+        notes.append("only hazard frames: no AUROC (nor in view), false-alarm rate or FPR at a TPR")
     core = core_measures(risk, target, hazard, reference, threshold)
     return {
         "frames": int(risk.size), "targets": int(has.sum()), "hazards": int(hazard.sum()),
@@ -376,6 +378,7 @@ def risk_quality(risk, truth: Sequence[FrameTruth], reference: float, threshold:
         "hit_rate": core["hit_rate"],
         "hit_in_view": float(np.mean(risk[in_view] > threshold)) if in_view.any() else float("nan"),
         "false_alarm_rate": core["false_alarm_rate"],
+        "fpr80": core["fpr80"],
         "fpr95": fpr_at_tpr(risk, hazard) if risk.size else float("nan"),
         "alarm_rate": float(np.mean(risk > threshold)) if risk.size else float("nan"),
         "notes": "; ".join(notes),

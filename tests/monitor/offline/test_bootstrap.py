@@ -59,6 +59,9 @@ def test_two_scenes_give_the_interval_of_each_scene_alone():
     assert (row["false_alarm_rate_lo"], row["false_alarm_rate_hi"]) == (0.0, 0.0)
     missing = int(row["notes"].split("false-alarm rate undefined on ")[1].split(" of ")[0])
     assert 0.2 * 2000 < missing < 0.3 * 2000  # a quarter of the draws are BB
+    # an 80 % hit rate needs every hazard of A (three at 0.1) on the draws with a hazard-free
+    # frame, so the threshold passes A's hazard-free 0.2 on each: 1 of 1
+    assert (row["fpr80_lo"], row["fpr80_hi"]) == (1.0, 1.0)
     # skill = 1 - RMSE / RMSE of the constant 0.5: its extremes are scene A's and scene B's own
     t = np.array(target)
     skill = [1 - rmse(risk[s], t[s]) / rmse(np.full(t[s].shape, 0.5), t[s]) for s in (slice(0, 5), slice(5, 7))]
@@ -74,6 +77,7 @@ def test_one_scene_gives_the_measure_itself_and_seeds_reproduce():
     assert row["hit_rate_lo"] == row["hit_rate_hi"] == 1.0
     assert row["false_alarm_rate_lo"] == row["false_alarm_rate_hi"] == 0.5
     assert row["auroc_lo"] == row["auroc_hi"] == 0.75  # 3 of the 4 pairs ordered: 0.6 < 0.7
+    assert row["fpr80_lo"] == row["fpr80_hi"] == 0.5  # both hazards: at >= 0.6, passing 0.7
     assert row["pearson_lo"] == row["pearson_hi"] == pytest.approx(np.corrcoef(risk, [0.8, 0.3, 0.5, 0.2])[0, 1])
     assert row["notes"] == ""
     assert first == bootstrap_tables(truth, ["s"] * 4, {"r": risk}, 0.4, 0.5, None, draws=50, seed=9)

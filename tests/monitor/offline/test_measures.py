@@ -58,12 +58,17 @@ def test_roc_curve_points():
     assert np.sum(np.diff(fpr) * (tpr[1:] + tpr[:-1]) / 2) == pytest.approx(0.875)
 
 
-def test_fpr_at_95_tpr():
+def test_fpr_at_a_tpr():
     # the three positives are all caught first at threshold 0.6: scores >= 0.6 are
     # 0.9 (+), 0.8 (+), 0.7 (-), 0.6 (+) -> FP 1 of 3 negatives
     assert fpr_at_tpr([0.9, 0.8, 0.7, 0.6, 0.5, 0.4], [1, 1, 0, 1, 0, 0]) == pytest.approx(1 / 3)
     # separable: 0
     assert fpr_at_tpr([0.9, 0.8, 0.2], [1, 1, 0]) == 0.0
+    # five positives: 4 of them (TPR 0.8) at >= 0.5, passing the negative 0.7 (1 of 3); all
+    # five (TPR >= 0.95) at >= 0.3, passing 0.7 and 0.4 (2 of 3)
+    scores, labels = [0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2], [1, 1, 0, 1, 1, 0, 1, 0]
+    assert fpr_at_tpr(scores, labels, 0.80) == pytest.approx(1 / 3)
+    assert fpr_at_tpr(scores, labels) == pytest.approx(2 / 3)
 
 
 def test_alarm_rates_use_strictly_above_the_threshold():
@@ -229,7 +234,7 @@ def test_risk_quality_on_a_small_table():
     assert q["rmse"] == pytest.approx(math.sqrt(0.43 / 4))
     assert q["skill"] == pytest.approx(1 - math.sqrt(0.43 / 0.42))
     # every frame ranks: hazards 0.8, 1.0 over non-hazards 0.3, 0.0, 0.6: 6 of 6 pairs
-    assert q["auroc"] == 1.0 and q["auprc"] == 1.0 and q["fpr95"] == 0.0
+    assert q["auroc"] == 1.0 and q["auprc"] == 1.0 and q["fpr80"] == 0.0 and q["fpr95"] == 0.0
     # alarms (> 0.5): both hazards; non-hazards 0.6 only -> 1/3
     assert q["hit_rate"] == 1.0 and q["false_alarm_rate"] == pytest.approx(1 / 3)
     assert q["hit_in_view"] == 1.0  # the one hazard frame in view, 0.8
@@ -260,7 +265,8 @@ def test_the_hit_rate_and_auroc_in_view_count_the_hazard_frames_in_view_alone():
 def test_risk_quality_says_why_a_measure_is_undefined():
     truth = [_truth(0.2, False), _truth(0.3, False), _truth(0.4, False)]
     q = risk_quality([0.5, 0.5, 0.5], truth, reference=0.3, threshold=0.5)
-    assert math.isnan(q["auroc"]) and math.isnan(q["hit_rate"]) and math.isnan(q["fpr95"])
+    assert math.isnan(q["auroc"]) and math.isnan(q["hit_rate"]) and math.isnan(q["fpr80"]) \
+        and math.isnan(q["fpr95"])
     assert math.isnan(q["pearson"]) and q["false_alarm_rate"] == 0.0
     assert "no hazard frame" in q["notes"] and "constant risk" in q["notes"]
     with pytest.raises(ValueError, match="one per frame"):
