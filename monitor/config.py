@@ -187,7 +187,7 @@ class ShieldConfig:
     Attributes
     ----------
     threshold : float in [0, 1]
-        Engage when the risk is above it.
+        Engage when the risk is above it (the paper's: 0.5).
     release : float in [0, threshold]
         Disengage when the risk is at or below it (``release == threshold``: no hysteresis).
     hold_frames : int >= 0
@@ -240,8 +240,8 @@ class ShieldConfig:
         this long is forgotten. None: no memory, the hold alone keeps the shield engaged.
     """
 
-    threshold: float = 0.5
-    release: float = 0.5
+    threshold: float = 0.3
+    release: float = 0.3
     hold_frames: int = 5
     deceleration: float = 3.0
     path_half_width: float | None = 1.25

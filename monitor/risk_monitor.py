@@ -30,7 +30,7 @@ over the corridor's road, or a road seen under its plane) and reports a surface 
 view as a near object, so of the visibility check it keeps only the hidden region. A frame whose
 features no rule of the rule base covers gives status ``no-rule-fired`` and
 ``risk.no_rule_fired`` (1.0 by default) instead of the rule base's fallback output (MATLAB's
-midpoint 0.5, which is exactly the shield's threshold).
+midpoint 0.5, which is exactly the paper's shield threshold).
 
 The constructor calls :meth:`RiskMonitor.warmup`, which runs a synthetic frame through
 every stage, so the first real frame costs what the others do. ``step`` may be called from

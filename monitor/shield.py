@@ -1,8 +1,11 @@
 """The controller shield: turns the risk stream into a deceleration request (paper, Sec. IV-B).
 
 The paper's shield starts to decelerate the vehicle whenever the monitor's risk exceeds a
-threshold (0.5); it is ``ShieldConfig(path_half_width=None, hold_frames=0)``. The default
-is path-gated with a 5-frame hold (below; docs/closed-loop.md). :class:`Shield` adds two
+threshold (0.5); it is ``ShieldConfig(threshold=0.5, release=0.5, path_half_width=None,
+hold_frames=0)``. The default is path-gated with a 5-frame hold (below; docs/closed-loop.md),
+and its threshold is 0.3: the risk is a mean over every object the monitor knows of, so
+one unseen object among three or more detected ones reads under 0.5, and the gate, not
+the risk, tells whether that object is in the way. :class:`Shield` adds two
 refinements against chattering on a noisy risk stream:
 
 - hysteresis: once engaged, it stays engaged until the risk falls to ``release`` or below
@@ -85,7 +88,7 @@ class ShieldDecision:
 
 
 def describe_shield(config: ShieldConfig) -> str:
-    """One line saying which shield ``config`` is, for reports: ``threshold 0.5, path gate
+    """One line saying which shield ``config`` is, for reports: ``threshold 0.3, path gate
     1.25 m, hold 5 frames``, or ``... the risk alone (the paper's)`` without a gate."""
     parts = [f"threshold {config.threshold:g}"]
     if config.release < config.threshold:

@@ -8,7 +8,7 @@ from monitor.config import ShieldConfig, load_config
 from monitor.shield import Shield, consistent, describe_shield
 
 #: the paper's shield: the risk alone decides, no hold
-PAPER = ShieldConfig(hold_frames=0, path_half_width=None)
+PAPER = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, path_half_width=None)
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -58,7 +58,7 @@ def test_shield_refuses_what_is_not_a_shield_config(config):
 
 # ------------------------------------------------------------------------- the path gate
 
-GATED = ShieldConfig(threshold=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
+GATED = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
                      margin=2.0, front=3.8, confirm_frames=1, confirm_window=1, emergency=None, memory=None)
 
 
@@ -216,20 +216,20 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
-        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
+        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
          "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
          "remembered 1 s")
     assert describe_shield(ShieldConfig(emergency=None, memory=None)) == \
-        ("threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
+        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
     one = ShieldConfig(emergency=None, confirm_near=None, memory=None)
     assert describe_shield(one) == \
-        "threshold 0.5, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
+        "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
         "threshold 0.6, release 0.4, the risk alone (the paper's), hold 0 frames"
-    assert describe_shield(replace(one, confirm_frames=1)) == "threshold 0.5, path gate 1.25 m, hold 5 frames"
+    assert describe_shield(replace(one, confirm_frames=1)) == "threshold 0.3, path gate 1.25 m, hold 5 frames"
     assert describe_shield(replace(one, confirm_width=None)) == \
-        "threshold 0.5, path gate 1.25 m, hold 5 frames, objects confirmed in 2 of 3 frames"
+        "threshold 0.3, path gate 1.25 m, hold 5 frames, objects confirmed in 2 of 3 frames"
 
 
 # ------------------------------------------------------------------- the emergency stage
@@ -304,7 +304,7 @@ def test_the_emergency_stage_is_checked_and_named():
         ShieldConfig(emergency=3.0)
     with pytest.raises(ValueError, match="emergency = 'hard', must be a number"):
         ShieldConfig(emergency="hard")
-    assert describe_shield(STAGED) == ("threshold 0.5, path gate 1.25 m, hold 2 frames, objects under 0.3 m "
+    assert describe_shield(STAGED) == ("threshold 0.3, path gate 1.25 m, hold 2 frames, objects under 0.3 m "
                                        "(beyond the emergency reach: all) confirmed in 2 of 3 frames, "
                                        "emergency 6 m/s^2")
 

@@ -239,7 +239,7 @@ def test_a_gated_shield_gets_each_frames_speed_and_unseen_objects(recording, ser
             assert row["shield"]["engaged"] is gated_engaged(row, c)
     # drive-b (rain) moves at 4.4 m/s with high risk from objects beside its path or beyond its
     # reach (7.4 m): the paper's shield (the risk alone, no hold) brakes there, the gated one does not
-    paper = Shield(ShieldConfig(path_half_width=None, hold_frames=0))
+    paper = Shield(ShieldConfig(threshold=0.5, release=0.5, path_half_width=None, hold_frames=0))
     decisions = [(row["shield"]["engaged"], paper.update(row["risk"]).engaged) for row in gated["drive-b.jsonl"]]
     differ = [d for d in decisions if d[0] != d[1]]
     assert differ and all(not engaged and paper_engaged for engaged, paper_engaged in differ)

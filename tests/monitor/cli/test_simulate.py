@@ -25,8 +25,8 @@ def test_simulate_smoke(tmp_path, capsys):
         assert (out / name).stat().st_size > 0, name
     runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     assert [(r["condition"], r["seed"], r["driver"]) for r in runs] == [
-        ("nominal", 0, "baseline"), ("nominal", 0, "t0.50 r0.50 h5 p1.25 c2/3<0.30 n2.5 e6 m1"),
-        ("snow", 1, "baseline"), ("snow", 1, "t0.50 r0.50 h5 p1.25 c2/3<0.30 n2.5 e6 m1")]
+        ("nominal", 0, "baseline"), ("nominal", 0, "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1"),
+        ("snow", 1, "baseline"), ("snow", 1, "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1")]
     assert len(runs[0]["history"]["time"]) == runs[0]["frames"]
     sweep = [json.loads(line) for line in (out / "sweep.jsonl").read_text().splitlines()]
     assert len(sweep) == len(sweep_settings(ShieldConfig()))  # 6 thresholds x 4 hysteresis settings

@@ -98,8 +98,8 @@ def rare_objects_detected(monkeypatch):
 
 
 def _paper(monitor):
-    """The paper's shield: the risk alone decides, no hold."""
-    return replace(monitor.config.shield, path_half_width=None, hold_frames=0)
+    """The paper's shield: the risk alone decides, above 0.5, no hold."""
+    return replace(monitor.config.shield, threshold=0.5, release=0.5, path_half_width=None, hold_frames=0)
 
 
 def test_always_detected_obstacle_no_collision_and_braking_distance(rare_objects_detected, perception, monitor):
