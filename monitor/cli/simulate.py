@@ -243,6 +243,16 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
                         f"{_num(m['impact_speed_shielded'])} m/s | {m['shield_only_collisions']} | "
                         f"{m['rear_ended_shielded']} |")
     lines += rows
+    if summary["by_hazard"]:
+        lines += ["", "## By what the hazard is (every hazard kind; sizes in runs.jsonl)", "",
+                  "| hazard | runs | base coll. | avoidable: avoided | unavoidable | shield-only |",
+                  "|---|---|---|---|---|---|"]
+        for name, m in summary["by_hazard"].items():
+            lines.append(f"| {name} | {m['runs']} | {_pct(m['baseline_collision_rate'])} | "
+                         f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']}"
+                         f"{_interval(m['avoidance_rate_avoidable_interval'])} | "
+                         f"{m['unavoidable_collisions']} ({_pct(m['avoidance_rate_unavoidable'])} avoided) | "
+                         f"{m['shield_only_collisions']} |")
     if "hazard-free" in summary["by_kind"]:
         lines += ["", "## Hazard-free drives (what the shield costs)", "",
                   "| condition | runs | false-brake rate | baseline braked | time braking | shield engaged | "

@@ -207,6 +207,10 @@ class Run:
     outcome : str
         ``collision`` (the ego's front hit something), ``rear-ended``, ``stopped``, ``passed``,
         ``arrived`` or ``timeout``.
+    hazard : dict or None
+        What the hazard is: ``class`` (its actor class: ``animal``, ``debris``,
+        ``wheelchair``, ``pedestrian``, ``car``) and ``size`` (``w, l, h``, metres); None for a
+        hazard-free drive.
     hit : str
         Class of what the ego hit ("" if nothing).
     impact_speed, closing_speed : float
@@ -240,6 +244,7 @@ class Run:
     regime: str
     cruise: float
     outcome: str = "timeout"
+    hazard: dict | None = None
     hit: str = ""
     impact_speed: float = 0.0
     closing_speed: float = 0.0
@@ -372,8 +377,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
     configs = [None] + shields
     members = [_Member(Run(spec.kind, spec.condition, int(spec.seed), driver_label(c), world.regime,
-                           world.speed), Shield(c) if c is not None else None, driver,
-                       perception.camera.cam_to_ego[:2, 3])
+                           world.speed, hazard=_what(world)),
+                       Shield(c) if c is not None else None, driver, perception.camera.cam_to_ego[:2, 3])
                for c in configs]
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
     # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
@@ -498,6 +503,14 @@ def _advance(world: World, command: float, group: list[_Member], driver: Driver)
             _finish(m.run, world, "passed")
         return False
     return True
+
+
+def _what(world: World) -> dict | None:
+    """``Run.hazard`` of a drive in ``world``: the hazard's class and size, None without one."""
+    if world.hazard is None:
+        return None
+    actor = world.hazard.actor
+    return {"class": actor.actor_class, "size": [actor.WIDTH, actor.LENGTH, actor.height]}
 
 
 def _finish(run: Run, world: World, outcome: str) -> None:

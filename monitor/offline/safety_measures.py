@@ -174,8 +174,10 @@ def summarise(runs: list[Run], driver: str) -> dict:
     -------
     dict
         ``by_kind``: kind -> measures over all its conditions; ``by_kind_condition``: kind ->
-        condition -> measures; ``by_condition``: condition -> {"hazard": ..., "guerin": ...};
-        ``overall``: {"hazard", "availability", "guerin"} over every run.
+        condition -> measures; ``by_hazard``: the hazard's class (``Run.hazard``) -> hazard
+        measures over the scenarios of every hazard kind with a hazard of that class;
+        ``by_condition``: condition -> {"hazard": ..., "guerin": ...}; ``overall``:
+        {"hazard", "availability", "guerin"} over every run.
     """
     pairs = pair_runs(runs, driver)
     kinds = list(dict.fromkeys(b.kind for b, _ in pairs))
@@ -190,6 +192,8 @@ def summarise(runs: list[Run], driver: str) -> dict:
                          for k in kinds}
     hazards = [p for p in pairs if p[0].kind in HAZARD_KINDS]
     drives = [p for p in pairs if p[0].kind not in HAZARD_KINDS]
+    classes = list(dict.fromkeys(b.hazard["class"] for b, _ in hazards))
+    by_hazard = {c: hazard_measures([p for p in hazards if p[0].hazard["class"] == c]) for c in classes}
     by_condition = {c: {"hazard": hazard_measures([p for p in hazards if p[0].condition == c]),
                         "guerin": guerin_measures([p for p in pairs if p[0].condition == c])}
                     for c in conditions}
@@ -197,6 +201,7 @@ def summarise(runs: list[Run], driver: str) -> dict:
         "driver": driver,
         "by_kind": by_kind,
         "by_kind_condition": by_kind_condition,
+        "by_hazard": by_hazard,
         "by_condition": by_condition,
         "overall": {"hazard": hazard_measures(hazards), "availability": availability_measures(drives),
                     "guerin": guerin_measures(pairs)},

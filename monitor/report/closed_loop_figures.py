@@ -88,7 +88,11 @@ def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
     ax.set(xlabel="false-brake rate (hazard-free drives the shield braked in)",
            ylabel="avoidable baseline collisions avoided", xlim=(-0.02, 1.02), ylim=(-0.02, 1.02),
            title="shield settings: safety against availability")
-    ax.legend(fontsize=8, loc="lower right")
+    if any(point["driver"] == default for point in shown):
+        ax.legend(fontsize=8, loc="lower right")
+    if not shown:
+        ax.text(0.5, 0.5, "nothing to plot: these runs have no hazard-free drives\nor no avoidable collisions",
+                ha="center", va="center", transform=ax.transAxes)
     fig.tight_layout(rect=(0, 0, 0.62, 1))
     fig.text(0.63, 0.95, "\n".join(key), va="top", fontsize=7, family="monospace")
     save_figure(fig, path, 80)

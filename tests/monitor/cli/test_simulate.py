@@ -32,6 +32,8 @@ def test_simulate_smoke(tmp_path, capsys):
     assert len(sweep) == len(sweep_settings(ShieldConfig()))  # 6 thresholds x 4 hysteresis settings
     summary = (out / "summary.md").read_text()
     assert "| cut-in | nominal | 1 |" in summary and "| cut-in | all | 2 |" in summary
+    assert runs[0]["hazard"]["class"] == "car" and len(runs[0]["hazard"]["size"]) == 3
+    assert "| car | 2 |" in summary  # the cut-in car, by what the hazard is
     # the outputs are there: a second run refuses to replace them, then does with --overwrite
     capsys.readouterr()
     assert main(args) == 2

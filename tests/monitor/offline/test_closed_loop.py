@@ -229,6 +229,10 @@ def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
                                               condition=BLIND)
     assert base.collided and base.braking_frames == 0
     assert base.impact_speed == pytest.approx(base.cruise)  # nothing braked it
+    obstacle = build_world(spec).hazard.actor  # the same scenario built again: what the runs record
+    assert base.hazard == shielded.hazard == {"class": obstacle.actor_class,
+                                              "size": [obstacle.WIDTH, obstacle.LENGTH, obstacle.height]}
+    assert base.hazard["class"] in ("animal", "debris", "wheelchair")
     assert base.onset is not None and base.onset["avoidable"]
     assert base.onset["seen_frames"] == 0 and base.onset["frames"] == base.frames - round(base.onset["time"] / 0.1)
     assert not shielded.collided and shielded.engaged_frames > 0 and shielded.final_gap > 0
@@ -300,8 +304,9 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0, in_path=True):
-    run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, impact_speed=impact,
+         engaged=0, impact=0.0, seen=0, in_path=True, what="debris"):
+    hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
+    run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged)
     run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
     return run
@@ -311,13 +316,15 @@ def test_measures_by_hand():
     shield = "t0.50 r0.50 h0"
     runs = [
         # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
-        _run("rare-object", 0, BASELINE, "collision", impact=10.0), _run("rare-object", 0, shield),
+        # seeds 0 and 2 are animals, 1 and 3 debris
+        _run("rare-object", 0, BASELINE, "collision", impact=10.0, what="animal"),
+        _run("rare-object", 0, shield, what="animal"),
         # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen; it
         # could no longer be avoided once it entered the path
         _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3, in_path=False),
         _run("rare-object", 1, shield, "collision", impact=4.0),
-        _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0),
-        _run("rare-object", 2, shield),
+        _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0, what="animal"),
+        _run("rare-object", 2, shield, what="animal"),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
         # 2 drives: the shield brakes in one (trip 12 s instead of 10 s: +20 %), not in the other
         _run("hazard-free", 0, BASELINE, "arrived", trip=10.0), _run("hazard-free", 0, shield, "arrived", trip=12.0,
@@ -333,6 +340,12 @@ def test_measures_by_hand():
     assert (h["avoidable_in_path_collisions"], h["avoidance_rate_avoidable_in_path"]) == (1, 1.0)  # seed 0
     assert h["avoidance_rate_avoidable_in_path_interval"] == sm.wilson_interval(1, 1)
     assert h["avoidance_rate_unavoidable"] == 1.0 and h["impact_speed_shielded"] == 4.0
+    # by the hazard's class: the animals' avoidable collision (seed 0) avoided, the debris' (seed 1) not
+    animal, debris = s["by_hazard"]["animal"], s["by_hazard"]["debris"]
+    assert list(s["by_hazard"]) == ["animal", "debris"]
+    assert (animal["runs"], animal["baseline_collisions"], animal["unavoidable_collisions"]) == (2, 2, 1)
+    assert (animal["avoidable_collisions"], animal["avoidance_rate_avoidable"]) == (1, 1.0)
+    assert (debris["runs"], debris["avoidable_collisions"], debris["avoidance_rate_avoidable"]) == (2, 1, 0.0)
     a = s["by_kind"]["hazard-free"]
     assert a["false_brake_rate"] == 0.5 and a["added_trip_time"] == pytest.approx(0.1)  # (20 % + 0) / 2
     assert a["braking_share"] == pytest.approx(5 / 20)
