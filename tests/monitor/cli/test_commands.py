@@ -60,6 +60,9 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
         assert row["hit_rate"] == np.mean(risk[hazard] > load_config().shield.threshold)
         assert row["hit_in_view"] == pytest.approx(np.mean(risk[in_view] > load_config().shield.threshold)
                                                    if in_view.any() else np.nan, nan_ok=True)
+        # false alarms at an 80 % hit rate: alarm at the risk of the hazard frame that reaches it
+        reach = np.sort(risk[hazard])[::-1][int(np.ceil(0.8 * hazard.sum())) - 1]
+        assert row["fpr80"] == np.mean(risk[~hazard] >= reach)
         # the AUROC in view: each pair of a hazard frame in view and a hazard-free frame
         pairs = [(p > n) + 0.5 * (p == n) for p in risk[in_view] for n in risk[~hazard]]
         assert len(pairs) > 0 and row["auroc_in_view"] == pytest.approx(np.mean(pairs), rel=1e-12)
@@ -75,7 +78,7 @@ def test_eval_writes_the_tables_and_its_rmse_is_the_features_rmse(tmp_path, caps
     assert {(r["condition"], r["predictor"]) for r in tables["intervals"]} == \
         {(c, name) for c in ("nominal", "all") for name in shipped}
     for row in tables["intervals"]:
-        for m in ("pearson", "skill", "hit_rate"):
+        for m in ("pearson", "skill", "hit_rate", "fpr80"):
             value = pytest.approx(quality[(row["condition"], row["predictor"])][m], rel=1e-12, nan_ok=True)
             assert row[f"{m}_lo"] == value and row[f"{m}_hi"] == value  # r: NaN, 2 frames
     for row in tables["paired"]:
