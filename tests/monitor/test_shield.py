@@ -7,7 +7,7 @@ import pytest
 from monitor.config import ShieldConfig, load_config
 from monitor.shield import Shield, consistent, describe_shield
 
-#: the paper's shield: the risk alone decides, no hold
+#: the paper's shield: the risk alone decides, above 0.5, no hold
 PAPER = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, path_half_width=None)
 
 
