@@ -79,17 +79,16 @@ def trade_off_figure(points: list[dict], default: str, path: Path) -> None:
         ax.plot(x, y, "o", color="tab:blue", ms=5)
         ax.annotate(str(k), (x, y), fontsize=8, xytext=(4, 3), textcoords="offset points")
         key.append(f"{k}: " + label.replace("\n", "\n   "))
-    for point in shown:
-        if point["driver"] == default:
-            ax.plot(point["false_brake_rate"], point["avoidance_rate_avoidable"], "r*", ms=16, zorder=3,
-                    label=f"default {default}")
+    marked = next((p for p in shown if p["driver"] == default), None)
+    if marked is not None:
+        ax.plot(marked["false_brake_rate"], marked["avoidance_rate_avoidable"], "r*", ms=16, zorder=3,
+                label=f"default {default}")
+        ax.legend(fontsize=8, loc="lower right")
     ax.axvline(0.05, color="grey", lw=0.8, ls=":")
     ax.axhline(0.95, color="grey", lw=0.8, ls=":")
     ax.set(xlabel="false-brake rate (hazard-free drives the shield braked in)",
            ylabel="avoidable baseline collisions avoided", xlim=(-0.02, 1.02), ylim=(-0.02, 1.02),
            title="shield settings: safety against availability")
-    if any(point["driver"] == default for point in shown):
-        ax.legend(fontsize=8, loc="lower right")
     if not shown:
         ax.text(0.5, 0.5, "nothing to plot: these runs have no hazard-free drives\nor no avoidable collisions",
                 ha="center", va="center", transform=ax.transAxes)
