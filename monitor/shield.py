@@ -78,13 +78,38 @@ import numpy as np
 from monitor.config import ShieldConfig
 
 
+#: what keeps the shield engaged in a frame (:attr:`ShieldDecision.cause`)
+CAUSES = ("risk", "no view", "at once", "confirmed", "remembered", "held")
+
+
 @dataclass(frozen=True)
 class ShieldDecision:
-    """The shield's output for one frame: whether it brakes, and how hard (m/s^2)."""
+    """The shield's output for one frame: whether it brakes, how hard (m/s^2), and why.
+
+    Attributes
+    ----------
+    engaged : bool
+    deceleration : float
+        m/s^2, 0.0 when not engaged.
+    risk : float
+        The frame's risk.
+    cause : str
+        "" when not engaged, else one of :data:`CAUSES`: ``risk``, the risk above the
+        threshold (the paper's shield, or a NaN risk); with a path gate, ``no view``, a frame
+        without a view; ``at once``, an unseen object in the path within reach that needs no
+        confirmation; ``confirmed``, one that did and got it; ``remembered``, a remembered
+        object (``memory``); ``held``, kept by the hold (or the hysteresis) after the last
+        of those.
+    objects : tuple of (x, y_min, y_max)
+        With ``at once`` and ``confirmed``, the unseen objects that counted (ego frame,
+        metres, as :attr:`monitor.RiskReport.unseen`); empty otherwise.
+    """
 
     engaged: bool
     deceleration: float
     risk: float
+    cause: str = ""
+    objects: tuple = ()
 
 
 def describe_shield(config: ShieldConfig) -> str:
@@ -188,23 +213,30 @@ class Shield:
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
         risk = float(risk)
         c = self.config
-        decel, kept = c.deceleration, 0.0
+        decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
-            decel, kept = self._in_path(speed, unseen, time, risk > c.threshold)
+            decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold)
+        cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
             self._decel = max(decel, c.deceleration)
+            cause = "risk" if math.isnan(risk) else why
         elif self.engaged:
             self._since_trigger += 1
             if kept > 0.0:
-                self._decel = max(self._decel, kept)
+                self._decel, cause = max(self._decel, kept), "remembered"
             elif (risk <= c.release or decel == 0.0) and self._since_trigger > c.hold_frames:
                 self.engaged = False
+            else:
+                cause = "held"
         elif kept > 0.0:  # a remembered object came within reach again: no new hold
             self.engaged, self._since_trigger, self._decel = True, c.hold_frames, kept
-        return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk)
+            cause = "remembered"
+        if cause not in ("at once", "confirmed"):
+            counted = ()
+        return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk, cause, counted)
 
-    def _in_path(self, speed, unseen, time, triggers: bool) -> tuple[float, float]:
+    def _in_path(self, speed, unseen, time, triggers: bool) -> tuple[float, float, str, tuple]:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
@@ -212,7 +244,9 @@ class Shield:
         ``confirm_near`` of the bumper count only once confirmed. Second, with a memory,
         the deceleration the remembered objects call for where they stand now (0.0
         without); the counting objects of a frame that ``triggers`` (its risk above the
-        threshold) are remembered."""
+        threshold) are remembered. Third and fourth, why the first would engage the shield
+        (``no view``, ``at once``, ``confirmed``; "" for nothing) and the objects that count,
+        as :class:`ShieldDecision` gives them."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
@@ -235,8 +269,9 @@ class Shield:
             self._time = time
         if c.memory is not None:  # forget what was not sighted for too long
             self._memory = self._memory[time - self._memory[:, 3] <= c.memory]
+        why, counted = "", ()
         if unseen is None:
-            decel = c.deceleration
+            decel, why = c.deceleration, "no view"
         else:
             w = c.path_half_width
             x, y_min, y_max = unseen.T
@@ -244,28 +279,32 @@ class Shield:
             urgent = np.zeros(near.shape[0], dtype=bool)
             if c.emergency is not None:
                 urgent = near[:, 0] - c.front <= self.reach(float(speed), c.emergency)
-            unconfirmed = np.zeros(near.shape[0], dtype=bool)
+            asked = np.zeros(near.shape[0], dtype=bool)  # those that must be confirmed
             if c.confirm_frames > 1:  # those that must be seen standing there often enough
                 width = math.inf if c.confirm_width is None else c.confirm_width
-                unconfirmed = near[:, 2] - near[:, 1] < width
+                asked = near[:, 2] - near[:, 1] < width
                 if c.emergency is not None:
-                    unconfirmed |= ~urgent
+                    asked |= ~urgent
                 if c.confirm_near is not None:
-                    unconfirmed |= near[:, 0] - c.front < c.confirm_near
-                if unconfirmed.any():
-                    hits = np.zeros(near.shape[0], dtype=np.int64)
-                    for t, then in self._history:
-                        hits += consistent(near, then, time - t, speed)
-                    unconfirmed &= hits < c.confirm_frames - 1
+                    asked |= near[:, 0] - c.front < c.confirm_near
+            unconfirmed = asked.copy()
+            if unconfirmed.any():
+                hits = np.zeros(near.shape[0], dtype=np.int64)
+                for t, then in self._history:
+                    hits += consistent(near, then, time - t, speed)
+                unconfirmed &= hits < c.confirm_frames - 1
             counts = ~unconfirmed
             if c.memory is not None:
                 self._renew(unseen, time)
                 if triggers:
                     self._remember(near[counts], time)
             decel = c.emergency if np.any(counts & urgent) else c.deceleration if counts.any() else 0.0
+            if counts.any():
+                why = "at once" if np.any(counts & ~asked) else "confirmed"
+                counted = tuple(tuple(row) for row in near[counts].tolist())
         if c.confirm_frames > 1:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
-        return decel, (0.0 if c.memory is None else self._remembered(float(speed)))
+        return decel, (0.0 if c.memory is None else self._remembered(float(speed))), why, counted
 
     def _renew(self, sightings: np.ndarray, time: float) -> None:
         """Renew, at the sighting, each remembered object where one of ``sightings`` (k, 3)

@@ -235,6 +235,10 @@ class Run:
     history : dict of lists
         Per frame: ``time``, ``speed``, ``gap`` (to the hazard, NaN without), ``risk`` (NaN for
         the baseline), ``engaged``, ``decel`` (applied, m/s^2).
+    engagements : list of dict
+        Each time the shield engaged (empty for the baseline): ``time``, ``speed``, the
+        ``deceleration`` it requested, its ``cause`` (:attr:`monitor.shield.ShieldDecision.cause`)
+        and the unseen ``objects`` that counted (``x, y_min, y_max``, ego frame, metres).
     """
 
     kind: str
@@ -255,6 +259,7 @@ class Run:
     engaged_frames: int = 0
     onset: dict | None = None
     history: dict = field(default_factory=lambda: {k: [] for k in HISTORY_KEYS})
+    engagements: list = field(default_factory=list)
 
     @property
     def collided(self) -> bool:
@@ -422,6 +427,11 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 if m.shield is not None:
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
                                                time=world.time)
+                    if decision.engaged and not (m.run.history["engaged"] and m.run.history["engaged"][-1]):
+                        m.run.engagements.append({"time": world.time, "speed": world.ego.speed,
+                                                  "deceleration": decision.deceleration,
+                                                  "cause": decision.cause,
+                                                  "objects": [list(o) for o in decision.objects]})
                     engaged, decel = decision.engaged, max(decel, decision.deceleration)
                 m.queue.append(-decel if decel > 0 else driver.comfort)
                 applied = m.queue.popleft()

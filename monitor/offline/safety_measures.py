@@ -14,8 +14,10 @@ baseline run of the same scenario:
   foreseeing where the hazard goes); the mean impact speed of the collisions left; collisions
   only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
-  the share of time spent braking and the **added trip time** (relative to the baseline's
-  trip over the same route).
+  what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
+  at once or once confirmed, a remembered one, a frame without a view), the share of time
+  spent braking and the **added trip time** (relative to the baseline's trip over the same
+  route).
 
 The rates the goals are stated in (avoidance of the avoidable collisions, also of those the
 detector missed, and the false-brake rate) come with 95 % Wilson score intervals: each
@@ -46,6 +48,7 @@ from scipy.stats import norm, t as student_t
 
 from monitor.offline.closed_loop import BASELINE, Run
 from monitor.offline.scenarios import HAZARD_KINDS
+from monitor.shield import CAUSES
 
 #: Share of the frames from a hazard's onset in which the baseline's detector must report it
 #: for the hazard to count as seen (``Run.onset["seen_frames"] / Run.onset["frames"]``).
@@ -140,6 +143,7 @@ def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
     frames = sum(s.frames for _, s in pairs)
     engaged = sum(s.engaged_frames > 0 for _, s in pairs)
     added = [s.trip_time / b.trip_time - 1.0 for b, s in pairs]
+    first = [s.engagements[0]["cause"] for _, s in pairs if s.engagements]
     return {
         "runs": n,
         "false_brake_rate": _rate(engaged, n),
@@ -150,6 +154,7 @@ def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "added_trip_time": _mean(added),
         "added_trip_time_interval": mean_interval(added),
         "not_arrived": sum(s.outcome != "arrived" for _, s in pairs),
+        "first_engagement": {cause: first.count(cause) for cause in CAUSES if cause in first},
     }
 
 

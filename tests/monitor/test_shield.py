@@ -395,3 +395,34 @@ def test_the_memory_is_checked_and_named():
                                          r"or remembers \(memory\)"):
         Shield(replace(REMEMBERS, confirm_frames=1, confirm_window=1)).update(0.9, speed=1.0,
                                                                               unseen=np.zeros((0, 3)))
+
+
+# ------------------------------------------------------------------- why the shield brakes
+
+def test_each_decision_says_why():
+    none = np.zeros((0, 3))
+    # the paper's shield: the risk; below the threshold, nothing
+    paper = Shield(PAPER)
+    assert [(d.cause, d.objects) for d in (paper.update(0.7), paper.update(0.2), paper.update(float("nan")))] \
+        == [("risk", ()), ("", ()), ("risk", ())]
+    # the gate: a wide object 15 m ahead counts at once; the hold keeps the shield 2 frames
+    wide = np.array([[3.8 + 15.0, -1.0, 1.0]])
+    decisions = _run(STAGED, [wide, none, none, none])
+    assert [d.cause for d in decisions] == ["at once", "held", "held", ""]
+    assert decisions[0].objects == ((3.8 + 15.0, -1.0, 1.0),) and decisions[1].objects == ()
+    # a small object once it stood there in 2 of 3 frames: confirmed, with the object counted
+    small = [np.array([[3.8 + 10.0, -0.1, 0.1]]), np.array([[3.8 + 9.0, -0.1, 0.1]])]
+    decisions = _run(STAGED, small)
+    assert [d.cause for d in decisions] == ["", "confirmed"] and decisions[1].objects == ((12.8, -0.1, 0.1),)
+    # beside a wide one, the wide one counts at once
+    assert _run(STAGED, [np.vstack([small[1], wide])])[0].cause == "at once"
+    # a frame without a view
+    assert _run(STAGED, [None])[0].cause == "no view"
+    # under the threshold, an object in the path engages nothing
+    assert Shield(STAGED).update(0.1, speed=10.0, unseen=wide, time=0.0).cause == ""
+    # a remembered object that comes within reach again engages the shield, and says so
+    remembers = Shield(replace(STAGED, memory=1.0, hold_frames=0))
+    far = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (14.0, 13.0)]
+    causes = [remembers.update(0.9, speed=10.0, unseen=u, time=0.1 * k).cause
+              for k, u in enumerate(far + [none])]
+    assert causes == ["at once", "at once", "remembered"]

@@ -274,6 +274,19 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
     assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 e6 m1")
+    # each engagement says why: the first for an unseen object in the path, where the
+    # obstacle stood then (the frame's hazard gap is measured from the ego's front, x from
+    # its origin 3.8 m behind); the baseline has none
+    assert base.engagements == []
+    first = shielded.engagements[0]
+    k = shielded.history["time"].index(first["time"])
+    assert shielded.history["engaged"][k] and (k == 0 or not shielded.history["engaged"][k - 1])
+    assert first["cause"] in ("at once", "confirmed") and first["deceleration"] in (3.0, 6.0)
+    assert first["speed"] == shielded.history["speed"][k]
+    gap = shielded.history["gap"][k]
+    assert any(abs(x - 3.8 - gap) < 1.5 and y_min <= 1.25 and y_max >= -1.25 for x, y_min, y_max in first["objects"])
+    onsets = sum(e and not (j and shielded.history["engaged"][j - 1]) for j, e in enumerate(shielded.history["engaged"]))
+    assert len(shielded.engagements) == onsets
     # a hazard-free drive with the blind detector: the risk is the rule base's worst whenever
     # traffic is in view. The paper's shield brakes in every frame and never arrives; the
     # gated one brakes only while something stands in the path within reach (a quarter of
@@ -304,10 +317,11 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0, in_path=True, what="debris"):
+         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=()):
     hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
-              trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged)
+              trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged,
+              engagements=[{"cause": c} for c in causes])
     run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
     return run
 
@@ -326,10 +340,14 @@ def test_measures_by_hand():
         _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0, what="animal"),
         _run("rare-object", 2, shield, what="animal"),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
-        # 2 drives: the shield brakes in one (trip 12 s instead of 10 s: +20 %), not in the other
+        # 3 drives: the shield brakes in two (trip 12 s instead of 10 s: +20 %; and +0 %), the
+        # first engaged at once, then once confirmed, the second first for a remembered object
         _run("hazard-free", 0, BASELINE, "arrived", trip=10.0), _run("hazard-free", 0, shield, "arrived", trip=12.0,
-                                                                     braking=5, engaged=4),
+                                                                     braking=5, engaged=4,
+                                                                     causes=("at once", "confirmed")),
         _run("hazard-free", 1, BASELINE, "arrived", trip=10.0), _run("hazard-free", 1, shield, "arrived", trip=10.0),
+        _run("hazard-free", 2, BASELINE, "arrived", trip=10.0), _run("hazard-free", 2, shield, "arrived", trip=10.0,
+                                                                     engaged=1, causes=("remembered",)),
     ]
     s = sm.summarise(runs, shield)
     h = s["by_kind"]["rare-object"]
@@ -347,18 +365,20 @@ def test_measures_by_hand():
     assert (animal["avoidable_collisions"], animal["avoidance_rate_avoidable"]) == (1, 1.0)
     assert (debris["runs"], debris["avoidable_collisions"], debris["avoidance_rate_avoidable"]) == (2, 1, 0.0)
     a = s["by_kind"]["hazard-free"]
-    assert a["false_brake_rate"] == 0.5 and a["added_trip_time"] == pytest.approx(0.1)  # (20 % + 0) / 2
-    assert a["braking_share"] == pytest.approx(5 / 20)
+    assert a["false_brake_rate"] == pytest.approx(2 / 3) and a["added_trip_time"] == pytest.approx(0.2 / 3)
+    assert a["braking_share"] == pytest.approx(5 / 30)
+    assert a["first_engagement"] == {"at once": 1, "remembered": 1}  # in CAUSES' order
     g = s["overall"]["guerin"]
-    # hazard: baseline 3 / 6 runs, shield 1 / 6; reward 1/trip: mean(1/12, 1/10) vs 1/10
-    assert g["safety_gain"] == pytest.approx(2 / 6) and g["residual_hazard"] == pytest.approx(1 / 6)
-    assert g["availability_cost"] == pytest.approx(1 - (1 / 12 + 1 / 10) / 2 / (1 / 10))
+    # hazard: baseline 3 / 7 runs, shield 1 / 7; reward 1/trip: mean(1/12, 1/10, 1/10) vs 1/10
+    assert g["safety_gain"] == pytest.approx(2 / 7) and g["residual_hazard"] == pytest.approx(1 / 7)
+    assert g["availability_cost"] == pytest.approx(1 - (1 / 12 + 2 / 10) / 3 / (1 / 10))
     assert h["avoidance_rate_avoidable_interval"] == sm.wilson_interval(1, 2)
     assert h["avoidance_rate_avoidable_missed_interval"] == sm.wilson_interval(1, 1)
-    assert a["false_brake_rate_interval"] == sm.wilson_interval(1, 2)
-    # t interval of (0.2, 0.0): mean 0.1, s = 0.1414, t(0.975, 1 dof) = 12.706
+    assert a["false_brake_rate_interval"] == sm.wilson_interval(2, 3)
+    # t interval of (0.2, 0.0, 0.0): mean 0.0667, s = 0.1155, t(0.975, 2 dof) = 4.3027
     lo, hi = a["added_trip_time_interval"]
-    assert (lo, hi) == pytest.approx((0.1 - 12.7062 * 0.1, 0.1 + 12.7062 * 0.1), abs=1e-4)
+    half = 4.3027 * 0.11547 / 3 ** 0.5
+    assert (lo, hi) == pytest.approx((0.2 / 3 - half, 0.2 / 3 + half), abs=1e-4)
     with pytest.raises(ValueError, match="expected 'baseline'"):
         sm.pair_runs(runs[1:], shield)
 
