@@ -420,7 +420,7 @@ def test_each_decision_says_why():
     assert _run(STAGED, [None])[0].cause == "no view"
     # under the threshold, an object in the path engages nothing
     assert Shield(STAGED).update(0.1, speed=10.0, unseen=wide, time=0.0).cause == ""
-    # a remembered object that comes within reach again engages the shield, and says so
+    # a remembered object keeps the shield engaged through a frame the view misses it, and says so
     remembers = Shield(replace(STAGED, memory=1.0, hold_frames=0))
     far = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (14.0, 13.0)]
     causes = [remembers.update(0.9, speed=10.0, unseen=u, time=0.1 * k).cause

@@ -341,13 +341,13 @@ def test_measures_by_hand():
         _run("rare-object", 2, shield, what="animal"),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
         # 3 drives: the shield brakes in two (trip 12 s instead of 10 s: +20 %; and +0 %), the
-        # first engaged at once, then once confirmed, the second first for a remembered object
+        # first engaged at once, then once confirmed, the second first in a frame without a view
         _run("hazard-free", 0, BASELINE, "arrived", trip=10.0), _run("hazard-free", 0, shield, "arrived", trip=12.0,
                                                                      braking=5, engaged=4,
                                                                      causes=("at once", "confirmed")),
         _run("hazard-free", 1, BASELINE, "arrived", trip=10.0), _run("hazard-free", 1, shield, "arrived", trip=10.0),
         _run("hazard-free", 2, BASELINE, "arrived", trip=10.0), _run("hazard-free", 2, shield, "arrived", trip=10.0,
-                                                                     engaged=1, causes=("remembered",)),
+                                                                     engaged=1, causes=("no view",)),
     ]
     s = sm.summarise(runs, shield)
     h = s["by_kind"]["rare-object"]
@@ -367,7 +367,7 @@ def test_measures_by_hand():
     a = s["by_kind"]["hazard-free"]
     assert a["false_brake_rate"] == pytest.approx(2 / 3) and a["added_trip_time"] == pytest.approx(0.2 / 3)
     assert a["braking_share"] == pytest.approx(5 / 30)
-    assert a["first_engagement"] == {"at once": 1, "remembered": 1}  # in CAUSES' order
+    assert list(a["first_engagement"].items()) == [("no view", 1), ("at once", 1)]  # in CAUSES' order
     g = s["overall"]["guerin"]
     # hazard: baseline 3 / 7 runs, shield 1 / 7; reward 1/trip: mean(1/12, 1/10, 1/10) vs 1/10
     assert g["safety_gain"] == pytest.approx(2 / 7) and g["residual_hazard"] == pytest.approx(1 / 7)
