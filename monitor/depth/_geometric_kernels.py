@@ -402,12 +402,13 @@ def standing(labels, index, corridor, xs, ys, zs, ds, plane, floor, top, x0, y0,
     ``index`` int64 (n,) maps a component to its row of the result (-1: not wanted), whose
     blocks all lie in the block rows ``row0`` to ``row1`` (inclusive).
 
-    Returns float64 (k, 3), k = ``index.max() + 1``, rows ``x, y_low, y_high``: the
-    smallest ego x of the component's rising blocks inside the corridor, and the
-    ``side_percentile`` and ``100 - side_percentile`` of its rising blocks' ego y. A
-    component with no rising block inside the corridor takes ``x`` over all its blocks
-    inside it (inf if none), one with no rising block ``y_low, y_high`` over all its blocks,
-    as :func:`object_stats` gives them; NaN rows for components without blocks.
+    Returns float64 (k, 4), k = ``index.max() + 1``, rows ``x, y_low, y_high, rising``:
+    the smallest ego x of the component's rising blocks inside the corridor, the
+    ``side_percentile`` and ``100 - side_percentile`` of its rising blocks' ego y, and the
+    number of its rising blocks. A component with no rising block inside the corridor takes
+    ``x`` over all its blocks inside it (inf if none), one with no rising block ``y_low,
+    y_high`` over all its blocks, as :func:`object_stats` gives them; NaN rows for
+    components without blocks.
     """
     rows, cols = ds.shape
     nx, ny = low.shape
@@ -475,13 +476,14 @@ def standing(labels, index, corridor, xs, ys, zs, ds, plane, floor, top, x0, y0,
             if up[r - row0, col] or counts[j, 1] == 0:
                 sides[fill[j]] = ys[r, col]
                 fill[j] += 1
-    out = np.full((k, 3), np.nan)
+    out = np.full((k, 4), np.nan)
     for j in range(k):
         if counts[j, 0] == 0:
             continue
         out[j, 0] = x_up[j] if x_up[j] < np.inf else x_all[j]
         out[j, 1] = _percentile(sides[start[j]:start[j + 1]], side_percentile)
         out[j, 2] = _percentile(sides[start[j]:start[j + 1]], 100.0 - side_percentile)
+        out[j, 3] = counts[j, 1]
     return out
 
 
@@ -688,12 +690,13 @@ def occlusion(labels, index, ds, xs, ys, zs, plane, road_q, stride, min_height, 
     ``labels``, ``index``, ``ds`` and ``stride`` as in :func:`surface_shape`; ``xs, ys,
     zs`` float32 (rows, cols) the blocks' ego-frame points; ``plane`` float64 (3,) the road
     ``z = a x + b y + c``; ``road_q`` float64 (3,) the road's inverse camera depth at pixel
-    ``(u, v)``, ``q0 + qu u + qv v`` as ``(q0, qu, qv)`` (1 / m). Returns float64 (k,), k =
-    ``index.max() + 1``: over the component's columns, the share whose top block has, among
-    the first ``edge_blocks`` valid blocks above it, one that stands ``min_height`` or more
-    above the road (something behind it, or above it) or one farther than ``edge_ratio``
-    times what the road would be there given the top block's depth (its depth times the
-    road's depth ratio between the two rows; above the horizon, its depth). A column
+    ``(u, v)``, ``q0 + qu u + qv v`` as ``(q0, qu, qv)`` (1 / m). Returns float64 (k, 2), k
+    = ``index.max() + 1``, rows ``either, by_depth``: over the component's columns, the
+    share whose top block has, among the first ``edge_blocks`` valid blocks above it, one
+    that stands ``min_height`` or more above the road (something behind it, or above it) or
+    one farther than ``edge_ratio`` times what the road would be there given the top
+    block's depth (its depth times the road's depth ratio between the two rows; above the
+    horizon, its depth); and the share with one so much farther (the depth alone). A column
     without a valid block above is not counted (the image's top edge, invalid pixels); NaN
     when no column is counted.
     """
@@ -709,10 +712,11 @@ def occlusion(labels, index, ds, xs, ys, zs, plane, road_q, stride, min_height, 
                 top[index[m], col] = r
     a, b, c = plane[0], plane[1], plane[2]
     q0, qu, qv = road_q[0], road_q[1], road_q[2]
-    out = np.full(k, np.nan)
+    out = np.full((k, 2), np.nan)
     for j in range(k):
         counted = 0
         hiding = 0
+        by_depth = 0
         for col in range(cols):
             r0 = top[j, col]
             if r0 < 0:
@@ -720,21 +724,25 @@ def occlusion(labels, index, ds, xs, ys, zs, plane, road_q, stride, min_height, 
             u = (col + 0.5) * stride
             q_top = q0 + qu * u + qv * (r0 + 0.5) * stride
             seen = 0
-            hides = False
+            stands_behind = False
+            farther = False
             r = r0 - 1
             while r >= 0 and seen < edge_blocks:
                 d = ds[r, col]
                 if d > 0.0:
                     seen += 1
-                    stands = zs[r, col] - (a * xs[r, col] + b * ys[r, col] + c) >= min_height
+                    if zs[r, col] - (a * xs[r, col] + b * ys[r, col] + c) >= min_height:
+                        stands_behind = True
                     q = q0 + qu * u + qv * (r + 0.5) * stride
                     road_ratio = q_top / q if q > 0.0 and q_top > q else 1.0
-                    if stands or d > edge_ratio * road_ratio * ds[r0, col]:
-                        hides = True
+                    if d > edge_ratio * road_ratio * ds[r0, col]:
+                        farther = True
                 r -= 1
             if seen > 0:
                 counted += 1
-                hiding += hides
+                hiding += stands_behind or farther
+                by_depth += farther
         if counted > 0:
-            out[j] = hiding / counted
+            out[j, 0] = hiding / counted
+            out[j, 1] = by_depth / counted
     return out

@@ -71,7 +71,14 @@ in the manner of the stereo-vision obstacle detectors:
    something (a block farther than ``OCCLUSION_RATIO`` times the road's depth there, or one
    standing above the road, among the first ``EDGE_BLOCKS`` valid blocks above its top) in
    fewer than ``min_occlusion`` of its columns is dropped (off when ``min_occlusion`` is
-   None).
+   None). Something standing above an object counts only for an object with an upright
+   face (one of its blocks rises, rule 8): a child in front of a car sees the car's rear
+   above her head, at about her depth. Above a flat object (none of its blocks rises) what
+   stands is as often the same surface farther on: the smooth error that lifts a patch of
+   road 0.2-0.3 m (read 10-15 % too near) goes on up the image, over ``min_height`` in
+   places and under it in others, and its far fragments stand right above the near ones.
+   So a flat object must hide by its depth; low debris, whose face is too short to rise,
+   does (the road behind its top lies 1.2 times farther).
 7. **A ledge along the road is no object.** A kerb (0.10-0.15 m) that the depth's noise
    lifts over ``min_height`` in places stands on the road and hides the sidewalk behind
    it, so rules 5 and 6 keep its fragments; in a corridor as wide as the traffic beside
@@ -91,7 +98,8 @@ in the manner of the stereo-vision obstacle detectors:
    *rise*: those whose ground cell, or one of the 8 around it, holds points ``min_rise``
    metres or more apart in height, counting the points from half of ``min_height`` up (the
    foot of a face, not the road). An object of which no block rises keeps the extents of
-   all its blocks: a flat object is still an object (off when ``min_rise`` is None).
+   all its blocks: a flat object is still an object, one that must hide by its depth
+   (rule 6; off when ``min_rise`` is None).
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -258,9 +266,9 @@ class GeometricParams:
         above the road, and is not an object. One with nothing valid beneath it floats when
         its incline exceeds the larger of ``max_incline`` and ``UNSUPPORTED_INCLINE``.
     min_occlusion : float or None
-        Share in [0, 1]: an object that hides what is behind it (see the module's rule 6) in
-        fewer than this share of its columns is a patch of road read too near, not an
-        object; None: the rule is off.
+        Share in [0, 1]: an object that hides what is behind it (see the module's rule 6; a
+        flat one by its depth) in fewer than this share of its columns is a patch of road
+        read too near, not an object; None: the rule is off.
     ledge_height, ledge_width : float or None, float
         An object whose top is under ``ledge_height`` metres above the road (``min_height <
         ledge_height <= max_height``), whose lateral span is under ``ledge_width`` metres
@@ -571,21 +579,24 @@ class GeometricRetriever:
             & (boxes[:, 3] >= params.min_size)
         if params.ledge_height is not None:
             keep &= ~self._ledges(scratch.labels, keep, stats[:, 9] - stats[:, 8], scratch.points, ground)
-        if keep.any():
-            keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground)
-        order = np.argsort(boxes[keep, 4], kind="stable")
-        extents = stats[keep][:, [6, 8, 9]]
+        extents = stats[:, [6, 8, 9]]
+        flat = np.zeros(keep.size, dtype=bool)  # rule 8: none of its blocks rises
         if params.min_rise is not None and keep.any():
             index = np.full(keep.size, -1, dtype=np.int64)
-            index[keep] = np.arange(extents.shape[0])
-            extents = kernels.standing(scratch.labels, index, scratch.corridor, xs, ys, zs, ds,
-                                       np.array(ground, dtype=np.float64), 0.5 * params.min_height,
-                                       params.max_height, *self._grid_origin, params.cell_size,
-                                       scratch.low, scratch.high, params.min_rise, params.depth_percentile,
-                                       int(stats[keep, 0].min()), int(stats[keep, 1].max()))
+            index[keep] = np.arange(int(keep.sum()))
+            standing = kernels.standing(scratch.labels, index, scratch.corridor, xs, ys, zs, ds,
+                                        np.array(ground, dtype=np.float64), 0.5 * params.min_height,
+                                        params.max_height, *self._grid_origin, params.cell_size,
+                                        scratch.low, scratch.high, params.min_rise, params.depth_percentile,
+                                        int(stats[keep, 0].min()), int(stats[keep, 1].max()))
+            extents[keep] = standing[:, :3]
+            flat[keep] = standing[:, 3] == 0
+        if keep.any():
+            keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground, flat[keep])
+        order = np.argsort(boxes[keep, 4], kind="stable")
         return GeometricView(
             boxes=boxes[keep][order],
-            extents=extents[order],
+            extents=extents[keep][order],
             free_distance=float(stats[keep, 6].min()) if keep.any() else math.inf,
             ground=np.array(ground, dtype=np.float64),
             ground_fitted=support > 0,
@@ -612,10 +623,11 @@ class GeometricRetriever:
             out[narrow] = (top < p.ledge_height) & (along > LEDGE_ELONGATION * across[narrow])
         return out
 
-    def _no_object(self, labels, keep, points, ground) -> np.ndarray:
+    def _no_object(self, labels, keep, points, ground, flat) -> np.ndarray:
         """Which of the kept components (``keep``, bool (n,)) are no objects: those that
         float (rule 5: ``max_incline``, ``min_contact``) or hide nothing (rule 6:
-        ``min_occlusion``). bool (kept,).
+        ``min_occlusion``; ``flat``, bool (kept,), the components none of whose blocks
+        rises, must hide by their depth). bool (kept,).
 
         The road plane ``z = a x + b y + c`` seen through the pixel ``(u, v)`` has the inverse
         camera depth ``(r_z - a r_x - b r_y) / (a o_x + b o_y + c - o_z)``, with ``r = M (u,
@@ -642,7 +654,7 @@ class GeometricRetriever:
             hides = kernels.occlusion(labels, index, ds, xs, ys, zs, np.array(ground, dtype=np.float64),
                                       np.array([q0, qu, qv]), p.stride, p.min_height, OCCLUSION_RATIO,
                                       EDGE_BLOCKS)
-            out |= hides < p.min_occlusion
+            out |= np.where(flat, hides[:, 1], hides[:, 0]) < p.min_occlusion
         return out
 
     def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
