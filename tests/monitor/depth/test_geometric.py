@@ -270,6 +270,18 @@ def test_a_flat_patch_must_hide_by_its_depth_what_stands_above_it_is_the_same_su
         assert found.shape == (1, 5) and _match(found, _truth(labels, depth, 0))[1] > 0.3
 
 
+def test_a_gate_arm_across_the_path_is_an_object():
+    # a parking barrier's arm, 0.1 m thick and 2.5 m long, 1 m above the road, 6 or 9 m ahead:
+    # flat (too thin to rise), floating (the road beneath it is farther), upright (one depth
+    # down its rows), and it hides the road far behind it: every rule keeps it
+    for x in (6.0, 9.0):
+        arm = [x, 0.0, 1.0, 2.5, 0.1, 0.1, 0.0]
+        depth, labels = _render([arm])
+        view = GeometricRetriever(CAMERA).view(depth)
+        assert view.boxes.shape == (1, 5) and _match(view.boxes, _truth(labels, depth, 0))[1] > 0.5
+        np.testing.assert_allclose(view.extents[0], [x - 0.05, -1.25, 1.25], atol=0.15)
+
+
 def test_what_stands_hides_what_is_behind_it_and_is_kept():
     # the objects of the floating test, a wall behind a car (above its roof the image sees
     # the wall, a few metres behind), and a child 0.7 m in front of a car (above the child's
