@@ -255,13 +255,15 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
                          f"{m['shield_only_collisions']} |")
     if "hazard-free" in summary["by_kind"]:
         lines += ["", "## Hazard-free drives (what the shield costs)", "",
-                  "| condition | runs | false-brake rate | first engaged by | baseline braked | time braking | "
-                  "shield engaged | added trip time | not arrived |", "|---|---|---|---|---|---|---|---|---|"]
+                  "| condition | runs | false-brake rate | first engaged by | first engaged on | baseline braked | "
+                  "time braking | shield engaged | added trip time | not arrived |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
         by_condition = summary["by_kind_condition"]["hazard-free"]
         for condition, m in list(by_condition.items()) + [("all", summary["by_kind"]["hazard-free"])]:
             first = ", ".join(f"{cause} {n}" for cause, n in m["first_engagement"].items()) or "-"
+            on = ", ".join(f"{what} {n}" for what, n in m["first_engaged_on"].items()) or "-"
             lines.append(f"| {condition} | {m['runs']} | {_pct(m['false_brake_rate'])}"
-                         f"{_interval(m['false_brake_rate_interval'])} | {first} | "
+                         f"{_interval(m['false_brake_rate_interval'])} | {first} | {on} | "
                          f"{_pct(m['baseline_brake_rate'])} | {_pct(m['braking_share'])} | "
                          f"{_pct(m['engaged_share'])} | {_pct(m['added_trip_time'])}"
                          f"{_interval(m['added_trip_time_interval'])} | {m['not_arrived']} |")

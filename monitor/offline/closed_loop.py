@@ -58,6 +58,7 @@ import copy
 import math
 from collections import deque
 from dataclasses import asdict, dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -65,12 +66,13 @@ from monitor.config import ShieldConfig
 from monitor.geometry.camera import Camera
 from monitor.geometry.boxes import DEFAULT_RANGE_M
 from monitor.geometry.boxes3d import footprints
+from monitor.offline.attribution import what_lies_there
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
 from monitor.offline.tracking import Tracker
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.synthetic import Condition, get_condition, render_depth
-from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, detect, estimate_depth
+from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, Detections, detect, estimate_depth
 from monitor.synthetic.scene import EGO_FRONT_M, EGO_HALF_WIDTH_M
 
 BASELINE = "baseline"
@@ -238,7 +240,8 @@ class Run:
     engagements : list of dict
         Each time the shield engaged (empty for the baseline): ``time``, ``speed``, the
         ``deceleration`` it requested, its ``cause`` (:attr:`monitor.shield.ShieldDecision.cause`)
-        and the unseen ``objects`` that counted (``x, y_min, y_max``, ego frame, metres).
+        and the unseen ``objects`` that counted (``x, y_min, y_max``, ego frame, metres), and
+        what each really lay on (``on``, :func:`monitor.offline.attribution.what_lies_there`).
     """
 
     kind: str
@@ -317,10 +320,9 @@ class Perception:
         self.camera = camera
         self.px_scale = camera.width / REFERENCE_WIDTH_PX
 
-    def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]):
-        """(estimated depth, detections, hazard visible pixels, hazard camera distance, hazard
-        row): the row of the hazard among the detections' ground truth (``dets.source``), -1
-        without a hazard.
+    def frame(self, world: World, condition, seeds: tuple[np.random.SeedSequence, np.random.SeedSequence]
+              ) -> "PerceivedFrame":
+        """The camera's frame of ``world`` now, under ``condition``.
 
         ``seeds`` seed the depth errors and the detector errors; a generator is made afresh
         from each, so the same seeds give the same errors every time.
@@ -336,7 +338,37 @@ class Perception:
         if hazard_row >= 0:
             visible = int(render.visible_px[hazard_row])
             distance = float(np.linalg.norm(boxes[hazard_row, :3] - self.camera.cam_to_ego[:3, 3]))
-        return depth, dets, visible, distance, hazard_row
+        return PerceivedFrame(depth, dets, visible, distance, hazard_row, render.labels, classes)
+
+
+class PerceivedFrame(NamedTuple):
+    """One frame of :meth:`Perception.frame`.
+
+    Attributes
+    ----------
+    depth : ndarray of shape (H, W), float32
+        The estimated depth, metres.
+    detections : Detections
+        The detector's output (``source``: the row of each detection's actor).
+    visible : int
+        Visible pixels of the hazard (0 without one).
+    distance : float
+        The hazard's distance from the camera, metres (inf without one).
+    hazard_row : int
+        The hazard's row among the actors, -1 without one.
+    labels : ndarray of shape (H, W), int16
+        What each pixel shows (the ray cast's label map: ``k + 1`` for actor ``k``).
+    classes : ndarray of shape (n,), str
+        The actors' classes.
+    """
+
+    depth: np.ndarray
+    detections: Detections
+    visible: int
+    distance: float
+    hazard_row: int
+    labels: np.ndarray
+    classes: np.ndarray
 
 
 class _Member:
@@ -393,13 +425,14 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     for step in range(n_steps):
         next_branches = []
         for world, group in branches:
-            depth, dets, visible, distance, hazard_row = perception.frame(world, condition, streams[step])
+            frame = perception.frame(world, condition, streams[step])
+            depth, dets, hazard_row = frame.depth, frame.detections, frame.hazard_row
             report = None
             if any(m.shield is not None for m in group):
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
             hazard = world.hazard
-            if onset is None and group[0].shield is None and hazard is not None and visible > 0 \
-                    and world.time >= hazard.onset - 1e-9 and distance <= max_range:
+            if onset is None and group[0].shield is None and hazard is not None and frame.visible > 0 \
+                    and world.time >= hazard.onset - 1e-9 and frame.distance <= max_range:
                 onset = {**_situation(world, driver, shield_decel), "frames": 0, "seen_frames": 0, "entry": None}
             if onset is not None and group[0].shield is None:  # the baseline's drive, from the onset
                 onset["frames"] += 1
@@ -431,7 +464,9 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                         m.run.engagements.append({"time": world.time, "speed": world.ego.speed,
                                                   "deceleration": decision.deceleration,
                                                   "cause": decision.cause,
-                                                  "objects": [list(o) for o in decision.objects]})
+                                                  "objects": [list(o) for o in decision.objects],
+                                                  "on": what_lies_there(decision.objects, depth, frame.labels,
+                                                                        frame.classes, perception.camera)})
                     engaged, decel = decision.engaged, max(decel, decision.deceleration)
                 m.queue.append(-decel if decel > 0 else driver.comfort)
                 applied = m.queue.popleft()

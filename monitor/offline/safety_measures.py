@@ -15,7 +15,9 @@ baseline run of the same scenario:
   only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
-  at once or once confirmed, a remembered one, a frame without a view), the share of time
+  at once or once confirmed, a remembered one, a frame without a view) and what the nearest
+  object that engaged it first really lay on (``on``, :mod:`monitor.offline.attribution`:
+  the road, a car beside the path, ...), the share of time
   spent braking and the **added trip time** (relative to the baseline's trip over the same
   route).
 
@@ -41,7 +43,7 @@ return is the route covered per second (progress rate). Then, over the runs of a
 from __future__ import annotations
 
 import math
-from collections import defaultdict
+from collections import Counter, defaultdict
 
 import numpy as np
 from scipy.stats import norm, t as student_t
@@ -144,6 +146,7 @@ def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
     engaged = sum(s.engaged_frames > 0 for _, s in pairs)
     added = [s.trip_time / b.trip_time - 1.0 for b, s in pairs]
     first = [s.engagements[0]["cause"] for _, s in pairs if s.engagements]
+    on = [_nearest_on(s.engagements[0]) for _, s in pairs if s.engagements and s.engagements[0]["objects"]]
     return {
         "runs": n,
         "false_brake_rate": _rate(engaged, n),
@@ -155,7 +158,14 @@ def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "added_trip_time_interval": mean_interval(added),
         "not_arrived": sum(s.outcome != "arrived" for _, s in pairs),
         "first_engagement": {cause: first.count(cause) for cause in CAUSES if cause in first},
+        "first_engaged_on": dict(sorted(Counter(on).items(), key=lambda item: (-item[1], item[0]))),
     }
+
+
+def _nearest_on(engagement: dict) -> str:
+    """What the nearest object that engaged the shield lay on (``Run.engagements``' ``on``)."""
+    nearest = min(range(len(engagement["objects"])), key=lambda k: engagement["objects"][k][0])
+    return engagement["on"][nearest]
 
 
 def guerin_measures(pairs: list[tuple[Run, Run]]) -> dict:

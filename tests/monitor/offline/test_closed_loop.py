@@ -194,12 +194,14 @@ class _EveryOther(Perception):
         self.frames = 0
 
     def frame(self, world, condition, seeds):
-        depth, dets, visible, distance, hazard_row = super().frame(world, condition, seeds)
+        frame = super().frame(world, condition, seeds)
         self.frames += 1
         if self.frames % 2:
-            k = dets.source != hazard_row
-            dets = Detections(dets.boxes3d[k], dets.classes[k], dets.scores[k], dets.source[k])
-        return depth, dets, visible, distance, hazard_row
+            dets = frame.detections
+            k = dets.source != frame.hazard_row
+            frame = frame._replace(detections=Detections(dets.boxes3d[k], dets.classes[k], dets.scores[k],
+                                                         dets.source[k]))
+        return frame
 
 
 def test_a_walker_detected_in_every_other_frame_the_planner_follows_its_track(monitor):
@@ -285,6 +287,10 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     assert first["speed"] == shielded.history["speed"][k]
     gap = shielded.history["gap"][k]
     assert any(abs(x - 3.8 - gap) < 1.5 and y_min <= 1.25 and y_max >= -1.25 for x, y_min, y_max in first["objects"])
+    # and what it lay on, looked up in the frame's ground truth: the obstacle
+    assert len(first["on"]) == len(first["objects"])
+    assert shielded.hazard["class"] in [on for (x, _, _), on in zip(first["objects"], first["on"])
+                                        if abs(x - 3.8 - gap) < 1.5]
     onsets = sum(e and not (j and shielded.history["engaged"][j - 1]) for j, e in enumerate(shielded.history["engaged"]))
     assert len(shielded.engagements) == onsets
     # a hazard-free drive with the blind detector: the risk is the rule base's worst whenever
@@ -317,11 +323,12 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=()):
+         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ())):
     hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged,
-              engagements=[{"cause": c} for c in causes])
+              engagements=[{"cause": c, "objects": list(first[0]) if k == 0 else [], "on": list(first[1]) if k == 0 else []}
+                           for k, c in enumerate(causes)])
     run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
     return run
 
@@ -341,10 +348,13 @@ def test_measures_by_hand():
         _run("rare-object", 2, shield, what="animal"),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
         # 3 drives: the shield brakes in two (trip 12 s instead of 10 s: +20 %; and +0 %), the
-        # first engaged at once, then once confirmed, the second first in a frame without a view
+        # first engaged at once (by two objects: on a car 8 m ahead, on the road 6 m ahead), then
+        # once confirmed, the second first in a frame without a view (no object)
         _run("hazard-free", 0, BASELINE, "arrived", trip=10.0), _run("hazard-free", 0, shield, "arrived", trip=12.0,
                                                                      braking=5, engaged=4,
-                                                                     causes=("at once", "confirmed")),
+                                                                     causes=("at once", "confirmed"),
+                                                                     first=([[8.0, -0.5, 0.5], [6.0, 0.2, 0.6]],
+                                                                            ["car", "road"])),
         _run("hazard-free", 1, BASELINE, "arrived", trip=10.0), _run("hazard-free", 1, shield, "arrived", trip=10.0),
         _run("hazard-free", 2, BASELINE, "arrived", trip=10.0), _run("hazard-free", 2, shield, "arrived", trip=10.0,
                                                                      engaged=1, causes=("no view",)),
@@ -368,6 +378,7 @@ def test_measures_by_hand():
     assert a["false_brake_rate"] == pytest.approx(2 / 3) and a["added_trip_time"] == pytest.approx(0.2 / 3)
     assert a["braking_share"] == pytest.approx(5 / 30)
     assert list(a["first_engagement"].items()) == [("no view", 1), ("at once", 1)]  # in CAUSES' order
+    assert a["first_engaged_on"] == {"road": 1}  # the nearest of the first engagement's objects
     g = s["overall"]["guerin"]
     # hazard: baseline 3 / 7 runs, shield 1 / 7; reward 1/trip: mean(1/12, 1/10, 1/10) vs 1/10
     assert g["safety_gain"] == pytest.approx(2 / 7) and g["residual_hazard"] == pytest.approx(1 / 7)
