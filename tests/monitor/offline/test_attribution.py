@@ -4,17 +4,10 @@ import numpy as np
 import pytest
 
 from monitor.datasets.frames import LABEL_ROAD
-from monitor.geometry.camera import Camera
 from monitor.offline.attribution import what_lies_there
 from monitor.synthetic.raycast import render_depth
 
 CLASSES = np.array(["car"])
-
-
-@pytest.fixture(scope="module")
-def camera():
-    front = Camera.nuscenes_front()
-    return Camera(np.diag([0.5, 0.5, 1.0]) @ front.K, 800, 450, front.cam_to_ego)
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,6 @@ pytest.importorskip("highway_env", reason="the closed loop needs the 'sim' extra
 import fuzzcore  # noqa: E402
 from monitor.config import load_config  # noqa: E402
 from monitor.depth.prior import build_prior  # noqa: E402
-from monitor.geometry.camera import Camera  # noqa: E402
 from monitor.offline import safety_measures as sm  # noqa: E402
 from monitor.offline.closed_loop import (  # noqa: E402
     BASELINE, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
@@ -33,13 +32,6 @@ _EXACT_DETECTOR = replace(
 SHARP = replace(NOMINAL, detector=_EXACT_DETECTOR)
 #: a detector that reports nothing at all
 BLIND = replace(NOMINAL, detector=replace(NOMINAL.detector, recall_max=0.0, fp_per_frame=0.0))
-
-
-@pytest.fixture(scope="module")
-def camera():
-    """nuScenes' front camera at half resolution (800 x 450), to keep the tests quick."""
-    front = Camera.nuscenes_front()
-    return Camera(np.diag([0.5, 0.5, 1.0]) @ front.K, 800, 450, front.cam_to_ego)
 
 
 @pytest.fixture(scope="module")
