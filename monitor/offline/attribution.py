@@ -30,7 +30,8 @@ ALONG_M = (-0.1, 1.5)
 #: Metres either side of an object's lateral span whose pixels count as the object's.
 SPAN_MARGIN_M = 0.05
 #: Heights above the road (z = 0 in the closed loop's ego frame) of the pixels that count,
-#: metres: above what the road's own depth error lifts a little, below what a car passes under.
+#: metres: the road's pixels read about right stay under the lower bound (a 10 % depth error
+#: lifts them 0.15 m: the camera's height times it), what a car passes under lies above the upper.
 HEIGHTS_M = (0.15, 3.0)
 #: Names of the label map's codes other than road users'.
 GROUND_NAMES = {LABEL_ROAD: "road", LABEL_MARKING: "road", LABEL_SIDEWALK: "sidewalk",
