@@ -317,10 +317,12 @@ def test_branches_equal_separate_runs(perception, monitor):
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
          engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ())):
     hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
+    engagements = [{"cause": c, "objects": [], "on": []} for c in causes]
+    if engagements:  # the first one's objects and what they lay on
+        engagements[0].update(objects=list(first[0]), on=list(first[1]))
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged,
-              engagements=[{"cause": c, "objects": list(first[0]) if k == 0 else [], "on": list(first[1]) if k == 0 else []}
-                           for k, c in enumerate(causes)])
+              engagements=engagements)
     run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
     return run
 
