@@ -252,15 +252,17 @@ def refine_plane(xs, ys, zs, idx, n, a, b, c, tol):
 
 @kernel
 def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_margin,
-             centre_y, tan_heading, step, half_width, tall_height, obstacle, corridor, tall):
-    """Which blocks stand above the road, which of those are inside the corridor, and
-    which blocks are taller than traffic.
+             centre_y, tan_heading, step, half_width, tall_height, obstacle, corridor, tall, road):
+    """Which blocks stand above the road, which of those are inside the corridor, which
+    blocks are taller than traffic, and which are the road.
 
     A valid block's height above the plane is ``h = z - (a x + b y + c)``. ``obstacle``
     (flat uint8) gets 1 where ``min_height <= h <= max_height`` and ``d <= max_range``;
     ``corridor`` gets 1 where a block is an obstacle and its lateral offset from the
     centreline is at most ``half_width``; ``tall`` gets 1 where ``h > tall_height`` (inf:
-    never). Returns ``(valid blocks, blocks with h < -below_margin)``.
+    never); ``road`` (flat int8) 1 where ``-below_margin <= h < min_height``, 0 for the
+    other valid blocks and -1 for the invalid ones. Returns ``(valid blocks, blocks with
+    h < -below_margin)``.
     """
     n_valid = 0
     n_below = 0
@@ -269,12 +271,14 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
         obstacle[k] = 0
         corridor[k] = 0
         tall[k] = 0
+        road[k] = -1
         if not d > 0.0:
             continue
         n_valid += 1
         x, y = xs[k], ys[k]
         h = zs[k] - (a * x + b * y + c)
         n_below += h < -below_margin
+        road[k] = h >= -below_margin and h < min_height
         tall[k] = h > tall_height
         if h >= min_height and h <= max_height and d <= max_range:
             obstacle[k] = 1
@@ -746,3 +750,35 @@ def occlusion(labels, index, ds, xs, ys, zs, plane, road_q, stride, min_height, 
             out[j, 0] = hiding / counted
             out[j, 1] = by_depth / counted
     return out
+
+
+@kernel
+def object_points(labels, row_of, xs, ys, zs, m, points, offsets):
+    """Each object's blocks in the ego frame, object by object.
+
+    ``labels`` int32 (rows, cols): each block's component, -1 for none; ``row_of`` int64
+    (n + 1,): each component's object row, -1 for a dropped one (its last entry, for label
+    -1, too); ``m`` objects. ``points`` float64 (>= member blocks, 3) gets ``x, y, z`` of
+    object 0's blocks (in row-major order), then object 1's, ...; ``offsets`` int64
+    (m + 1,) where each object's rows start (``offsets[m]``: their number).
+    """
+    rows, cols = labels.shape
+    for k in range(m + 1):
+        offsets[k] = 0
+    for i in range(rows):
+        for j in range(cols):
+            r = row_of[labels[i, j]]
+            if r >= 0:
+                offsets[r + 1] += 1
+    for k in range(m):
+        offsets[k + 1] += offsets[k]
+    fill = offsets[:m].copy()
+    for i in range(rows):
+        for j in range(cols):
+            r = row_of[labels[i, j]]
+            if r >= 0:
+                n = fill[r]
+                points[n, 0] = xs[i, j]
+                points[n, 1] = ys[i, j]
+                points[n, 2] = zs[i, j]
+                fill[r] = n + 1

@@ -100,6 +100,22 @@ in the manner of the stereo-vision obstacle detectors:
    foot of a face, not the road). An object of which no block rises keeps the extents of
    all its blocks: a flat object is still an object, one that must hide by its depth
    (rule 6; off when ``min_rise`` is None).
+9. **What comes out of the road was never there.** Given the blocks of an earlier frame
+   and how far the ego moved since (:meth:`GeometricRetriever.emerged`), each object's
+   blocks (:attr:`GeometricView.points`) are put back where they stood then (the ego's
+   travel added to their x) and looked up in that frame's :attr:`~GeometricView.blocks`:
+   what it saw there, the road, something else, or nothing valid. A thing standing
+   on the road was in the earlier frame too, where it stood then (or hidden behind
+   something, or beside its place: a pedestrian stepping out, a car cutting in, moving a
+   fraction of its width between frames); a patch of road that the depth reads too near in
+   one frame stood where that frame saw the road. ``emerged`` is the share of an object's
+   blocks that the earlier frame saw as road, among those that land on one of its valid
+   blocks; it is evidence, not a verdict (a dark obstacle that the network blended into
+   the road in one frame reappears from it in the next): the monitor takes the smallest
+   share over the last two frames (:meth:`monitor.RiskMonitor.emerged`) and the shield asks
+   such an object to be confirmed before it brakes for it (:class:`monitor.shield.Shield`,
+   ``confirm_emerged``). It is the free space of Elfes' occupancy grids, a cell seen empty
+   before, asked of the frames just before.
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -123,6 +139,7 @@ before a real-time loop.
 from __future__ import annotations
 
 import math
+import numbers
 import threading
 from dataclasses import dataclass
 
@@ -157,6 +174,12 @@ TOP_PERCENTILE = 95.0
 #: a ledge reaches along the ego's x more than this many times its lateral span (the kerbs'
 #: fragments in the benchmark's held-out frames: 2.6 to 11 times)
 LEDGE_ELONGATION = 2.0
+
+#: an object's ``emerged`` share is NaN when fewer of its blocks than this land on valid
+#: blocks of the earlier frame (it was out of its image, or its depth there was invalid)
+MIN_EMERGED_BLOCKS = 3
+#: what a block showed (:attr:`GeometricView.blocks`)
+BLOCK_INVALID, BLOCK_OTHER, BLOCK_ROAD = -1, 0, 1
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -403,6 +426,13 @@ class GeometricView:
         Share of valid pixels among those looking at the corridor's road (1 if none do).
     below_ground_fraction : float
         Share of valid blocks more than ``below_margin`` under the plane used.
+    blocks : ndarray of shape (H / stride, W / stride), int8
+        What each block showed: ``BLOCK_ROAD`` (1; less than ``min_height`` above the plane
+        used and at most ``below_margin`` under it), ``BLOCK_OTHER`` (0; anything else
+        valid) or ``BLOCK_INVALID`` (-1; no valid pixel). A later frame's ``before``.
+    points : tuple of ndarray of shape (n_i, 3), float64
+        Per object (rows as ``boxes``), its blocks in the ego frame (``x, y, z``, metres),
+        for :meth:`GeometricRetriever.emerged` (rule 9) in a later frame.
     """
 
     boxes: np.ndarray
@@ -414,6 +444,8 @@ class GeometricView:
     valid_fraction: float
     corridor_valid_fraction: float
     below_ground_fraction: float
+    blocks: np.ndarray
+    points: tuple
 
 
 class GeometricRetriever:
@@ -493,6 +525,8 @@ class GeometricRetriever:
             local.obstacle = np.empty((rows, cols), dtype=np.uint8)
             local.corridor = np.empty((rows, cols), dtype=np.uint8)
             local.tall = np.empty((rows, cols), dtype=np.uint8)
+            local.road = np.empty((rows, cols), dtype=np.int8)  # GeometricView.blocks
+            local.object_points = np.empty((rows * cols, 3), dtype=np.float64)
             local.labels = np.empty((rows, cols), dtype=np.int32)
             local.candidates = np.empty(rows * cols, dtype=np.int64)
             local.grid = np.empty(self._grid_shape, dtype=np.int32)
@@ -558,7 +592,7 @@ class GeometricRetriever:
             x, y, z, d, a, b, c, params.min_height, params.max_height, params.max_range,
             params.below_margin, centre_y, tan_heading, CORRIDOR_STEP_M, corridor.half_width,
             math.inf if params.structure_height is None else params.structure_height,
-            scratch.obstacle.ravel(), scratch.corridor.ravel(), scratch.tall.ravel())
+            scratch.obstacle.ravel(), scratch.corridor.ravel(), scratch.tall.ravel(), scratch.road.ravel())
         below = n_below / n_valid if n_valid else 0.0
         if below > params.max_below_fraction:
             raise BlindViewError("below_ground", below, params.max_below_fraction)
@@ -594,6 +628,11 @@ class GeometricRetriever:
         if keep.any():
             keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground, flat[keep])
         order = np.argsort(boxes[keep, 4], kind="stable")
+        row_of = np.full(n + 1, -1, dtype=np.int64)  # component -> row of boxes; label -1 -> -1
+        row_of[np.flatnonzero(keep)[order]] = np.arange(order.size)
+        offsets = np.empty(order.size + 1, dtype=np.int64)
+        kernels.object_points(scratch.labels, row_of, xs, ys, zs, order.size, scratch.object_points, offsets)
+        points = tuple(scratch.object_points[offsets[k]:offsets[k + 1]].copy() for k in range(order.size))
         return GeometricView(
             boxes=boxes[keep][order],
             extents=extents[keep][order],
@@ -604,7 +643,53 @@ class GeometricRetriever:
             valid_fraction=1.0 - invalid_fraction,
             corridor_valid_fraction=1.0 - corridor_invalid,
             below_ground_fraction=below,
+            blocks=scratch.road.copy(),
+            points=points,
         )
+
+    def emerged(self, points, before: np.ndarray, travel: float) -> np.ndarray:
+        """Rule 9: per object, the share of its blocks that an earlier frame saw as road.
+
+        Parameters
+        ----------
+        points : sequence of ndarray of shape (n_i, 3)
+            Objects' blocks in the ego frame now (:attr:`GeometricView.points`, or some of them).
+        before : ndarray of shape (H / stride, W / stride), int8
+            The earlier frame's :attr:`GeometricView.blocks`.
+        travel : float
+            Metres the ego moved forward (along its x) since the earlier frame; negative
+            when it backed.
+
+        Returns
+        -------
+        ndarray of shape (len(points),), float64
+            The share in [0, 1]; NaN where fewer than ``MIN_EMERGED_BLOCKS`` of the object's
+            blocks landed on valid blocks of ``before`` (out of its image, or invalid there).
+        """
+        if not (isinstance(before, np.ndarray) and before.dtype == np.int8 and before.shape == self._blocks):
+            what = f"an array of {before.dtype} {before.shape}" if isinstance(before, np.ndarray) \
+                else f"a {type(before).__name__}"
+            raise ValueError(f"before is {what}, expected the blocks of an earlier frame's view of this "
+                             f"camera (GeometricView.blocks: int8 {self._blocks})")
+        if isinstance(travel, bool) or not isinstance(travel, numbers.Real) or not math.isfinite(travel):
+            raise ValueError(f"travel = {travel!r}, expected the finite metres the ego moved since before's frame")
+        m = len(points)
+        if m == 0:
+            return np.zeros(0)
+        which = np.repeat(np.arange(m), [len(p) for p in points])
+        moved = np.concatenate(points) + np.array([float(travel), 0.0, 0.0])
+        cam = moved @ self.camera.ego_to_cam[:3, :3].T + self.camera.ego_to_cam[:3, 3]
+        ahead = cam[:, 2] > 0
+        uv = (cam[ahead] @ self.camera.K[:2].T) / cam[ahead, 2:3]
+        s = self.params.stride
+        i, j = np.floor(uv[:, 1] / s), np.floor(uv[:, 0] / s)
+        inside = (i >= 0) & (i < before.shape[0]) & (j >= 0) & (j < before.shape[1])
+        seen = before[i[inside].astype(np.int64), j[inside].astype(np.int64)]
+        which = which[ahead][inside]
+        valid = np.bincount(which[seen != BLOCK_INVALID], minlength=m)
+        road = np.bincount(which[seen == BLOCK_ROAD], minlength=m)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(valid >= MIN_EMERGED_BLOCKS, road / valid, np.nan)
 
     def _ledges(self, labels, keep, across, points, ground) -> np.ndarray:
         """Which components are ledges along the road (rule 7), bool (n,): among the kept

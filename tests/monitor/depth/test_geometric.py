@@ -396,6 +396,55 @@ def test_surface_shape_by_hand():
     assert out.shape == (1, 2) and np.isnan(out).all()
 
 
+def test_what_stood_there_a_frame_before_did_not_come_out_of_the_road():
+    retriever, travel = GeometricRetriever(CAMERA), 1.0
+    boxes = [CAR_AHEAD, PEDESTRIAN]
+    now = retriever.view(_render(boxes)[0])
+    assert len(now.points) == len(now.boxes) == 2
+    for points, (x, y, z, w, length, h, _) in zip(now.points, sorted(boxes)):  # rows nearest first
+        # each object's blocks lie on its box (a block at its edge reads its nearest depth: 0.2 m)
+        assert np.all(np.abs(points - [x, y, z]) <= np.array([length, w, h]) / 2 + 0.2)
+    # the frame before, 1 m back: each object 1 m farther; its blocks, put back, land on it
+    before = retriever.view(_render([[b[0] + travel, *b[1:]] for b in boxes])[0]).blocks
+    assert np.all(retriever.emerged(now.points, before, travel) < 0.05)
+    # the frame before saw the empty road: its blocks show the road where the line of sight to
+    # a block put back meets the ground (z = 0) before the sky's 80 m, the sky elsewhere
+    empty = retriever.view(_render([])[0]).blocks
+    centre = CAMERA.cam_to_ego[:3, 3]
+    for points, share in zip(now.points, retriever.emerged(now.points, empty, travel)):
+        back = points + [travel, 0.0, 0.0]
+        below = back[:, 2] < centre[2]
+        ground = centre + (back - centre) * (centre[2] / np.where(below, centre[2] - back[:, 2], np.nan))[:, None]
+        depth = CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2]
+        assert share == pytest.approx(np.mean(below & (depth < _SKY)), abs=0.05)
+
+
+def test_a_patch_of_road_read_too_near_came_out_of_the_road():
+    rules_off = GeometricParams(max_incline=None, min_occlusion=None)  # so that the patch is an object
+    retriever, travel = GeometricRetriever(CAMERA, rules_off), 1.2
+    road, _ = _render([])
+    blob = road.copy()
+    blob[680:760, 700:900] *= np.float32(0.6)
+    now = retriever.view(blob)
+    assert now.boxes.shape == (1, 5)
+    # the frame before read the road right: every block of the patch stood where it saw the road
+    assert retriever.emerged(now.points, retriever.view(road).blocks, travel).tolist() == [1.0]
+    # the same patch read in the frame before too (where the ego's travel puts it then): 0
+    shifted = road.copy()
+    shifted[680:760, 700:900] *= np.float32(0.6)
+    assert retriever.emerged(now.points, retriever.view(shifted).blocks, 0.0).tolist() == [0.0]
+    # where the frame before had no valid depth nothing can be told
+    blind = np.full(now.blocks.shape, -1, dtype=np.int8)
+    assert np.isnan(retriever.emerged(now.points, blind, travel)).all()
+    assert retriever.emerged((), blind, travel).shape == (0,)
+    with pytest.raises(ValueError, match=r"before is an array of int64 \(3, 3\), expected the blocks"):
+        retriever.emerged(now.points, np.zeros((3, 3), dtype=np.int64), travel)
+    with pytest.raises(ValueError, match="before is a list"):
+        retriever.emerged(now.points, [[1]], travel)
+    with pytest.raises(ValueError, match="travel = nan, expected the finite metres"):
+        retriever.emerged(now.points, blind, float("nan"))
+
+
 def test_an_empty_road_has_no_object_and_an_infinite_free_distance():
     depth, _ = _render([WALL, POLE])
     view = GeometricRetriever(CAMERA).view(depth)
@@ -660,9 +709,10 @@ def test_classify_equals_numpy():
     corridor = Corridor(1.75, curvature=0.02)
     centre, tan = corridor.table(40.0, CORRIDOR_STEP_M)
     obstacle, inside, tall = (np.empty(x.size, np.uint8) for _ in range(3))
+    road = np.empty(x.size, np.int8)
     plane = (0.02, -0.01, 0.1)
     n_valid, n_below = kernels.classify(x, y, z, d, *plane, 0.2, 2.5, 20.0, 0.05, centre, tan,
-                                        CORRIDOR_STEP_M, 1.75, 1.0, obstacle, inside, tall)
+                                        CORRIDOR_STEP_M, 1.75, 1.0, obstacle, inside, tall, road)
     x64, y64, z64, d64 = (a.astype(np.float64) for a in (x, y, z, d))
     h = z64 - (0.02 * x64 - 0.01 * y64 + 0.1)
     valid = d64 > 0
@@ -673,6 +723,8 @@ def test_classify_equals_numpy():
     np.testing.assert_array_equal(obstacle, expected)
     np.testing.assert_array_equal(inside, expected & (lateral <= 1.75))
     np.testing.assert_array_equal(tall, valid & (h > 1.0))
+    np.testing.assert_array_equal(road, np.where(valid, (h >= -0.05) & (h < 0.2), -1))
+    assert (road == 1).any() and (road == 0).any() and (road == -1).any()
     assert 0 < tall.sum() < valid.sum()
     assert n_valid == valid.sum() and n_below == (valid & (h < -0.05)).sum()
     assert 0 < inside.sum() < expected.sum()
@@ -691,6 +743,20 @@ def test_footprint_blocks_equals_numpy():
     expected = np.flatnonzero((gd <= 20.0) & (gx >= 0) & (lateral <= 1.75))
     assert 0 < expected.size < 3000
     np.testing.assert_array_equal(out[:n], expected)
+
+
+def test_object_points_equal_numpy():
+    rng = np.random.default_rng(4)
+    labels = rng.integers(-1, 5, size=(30, 40)).astype(np.int32)
+    xs, ys, zs = (rng.normal(size=(30, 40)).astype(np.float32) for _ in range(3))
+    row_of = np.array([1, -1, 0, 2, -1, -1], dtype=np.int64)  # components 0..4, then label -1
+    points, offsets = np.full((1200, 3), np.nan), np.empty(4, dtype=np.int64)
+    kernels.object_points(labels, row_of, xs, ys, zs, 3, points, offsets)
+    for row, component in enumerate((2, 0, 3)):
+        mine = labels == component  # row-major, as the kernel goes
+        np.testing.assert_array_equal(points[offsets[row]:offsets[row + 1]],
+                                      np.column_stack([xs[mine], ys[mine], zs[mine]]))
+    assert offsets[0] == 0 and offsets[3] == np.isin(labels, (0, 2, 3)).sum()
 
 
 def _label_numpy(xs, ys, obstacle, x0, y0, cell, shape):
