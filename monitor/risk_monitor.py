@@ -42,6 +42,7 @@ import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -79,6 +80,8 @@ class InvalidFrameError(ValueError):
     what was expected). :meth:`RiskMonitor.check_frame` raises it."""
 
 _EMPTY = np.zeros((0, 5))
+#: how many frames before a report :meth:`RiskMonitor.emerged` compares it with
+EMERGED_FRAMES = 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,6 +118,14 @@ class RiskReport:
         :meth:`~monitor.geometry.camera.Camera.ground_extents`); (0, 3) when the view found
         nothing; None for frames without a view (``invalid-input``, ``no-view``). The
         path-gated shield reads it (:class:`monitor.shield.Shield`).
+    unseen_points : tuple of ndarray of shape (n_i, 3)
+        Per unseen object (rows as ``unseen``), its blocks in the ego frame
+        (:attr:`monitor.depth.geometric.GeometricView.points`); empty for the paper's view
+        and frames without a view. :meth:`RiskMonitor.emerged` reads them.
+    blocks : ndarray of shape (H / stride, W / stride), int8, or None
+        What the geometric view saw in each block of pixels, the road or not
+        (:attr:`monitor.depth.geometric.GeometricView.blocks`): a later frame's ``before``
+        in :meth:`RiskMonitor.emerged`; None for the paper's view and frames without a view.
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
         ``alignment``, ``inference``.
@@ -131,6 +142,8 @@ class RiskReport:
     fired: list = field(default_factory=list)
     free_distance: float = float("nan")
     unseen: np.ndarray | None = None
+    unseen_points: tuple = ()
+    blocks: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -153,6 +166,22 @@ class RiskReport:
 def _json_distance(value: float) -> float | str | None:
     """A distance as strict JSON holds it: null for NaN, ``"inf"`` for inf, else the number."""
     return None if math.isnan(value) else "inf" if math.isinf(value) else value
+
+
+class _DepthView(NamedTuple):
+    """What :meth:`RiskMonitor._depth_view` saw: S (m, 5); where each stands in the ego
+    frame (m, 3) ``x, y_min, y_max`` (the geometric view measures it from its points, the
+    paper's is back-projected from the box); the free distance ahead (NaN for the paper's
+    view); why the view cannot see through the frame ("" when it can); each S's blocks in the
+    ego frame and the view's blocks (the geometric view's rule 9; empty and None for the
+    paper's)."""
+
+    S: np.ndarray
+    extents: np.ndarray
+    free: float
+    blind: str
+    points: tuple
+    blocks: np.ndarray | None
 
 
 class RiskMonitor:
@@ -244,21 +273,46 @@ class RiskMonitor:
         centre = self.camera.camera_to_ego(np.array([[0.0, 0.0, near + 0.5]]))[0]
         return depth, np.array([[*centre, 1.0, 1.0, 1.0, 0.0]])
 
-    def _depth_view(self, depth: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, str]:
-        """S, where each S stands in the ego frame (``x, y_min, y_max``: the geometric view
-        measures it from its points, the paper's is back-projected from the box), the free
-        distance ahead (NaN for the paper's view) and why the view cannot see through the
-        frame ("" when it can)."""
+    def _depth_view(self, depth: np.ndarray) -> "_DepthView":
+        """What the depth view saw in one depth map."""
         if isinstance(self._retriever, GeometricRetriever):
             try:
                 view = self._retriever.view(depth)
             except BlindViewError as exc:
-                return np.zeros((0, 5)), np.zeros((0, 3)), float("nan"), str(exc)
-            S, extents, free = view.boxes, view.extents, view.free_distance
-        else:
-            S, free = self._retriever(depth), float("nan")
-            extents = self.camera.ground_extents(S)
-        return S, extents, free, check_view(depth, self._visibility)
+                return _DepthView(np.zeros((0, 5)), np.zeros((0, 3)), float("nan"), str(exc), (), None)
+            return _DepthView(view.boxes, view.extents, view.free_distance, check_view(depth, self._visibility),
+                              view.points, view.blocks)
+        S = self._retriever(depth)
+        return _DepthView(S, self.camera.ground_extents(S), float("nan"), check_view(depth, self._visibility),
+                          (), None)
+
+    def emerged(self, report: RiskReport, earlier) -> np.ndarray | None:
+        """Per unseen object of ``report``, the smallest share of its blocks that one of the
+        frames before saw as road (the geometric view's rule 9,
+        :meth:`monitor.depth.geometric.GeometricRetriever.emerged`): the shield's
+        ``emerged`` (``confirm_emerged``). A patch of road that the depth reads too near in
+        one frame stood where each frame before saw the road; an obstacle that the network
+        blended into the road in one of them stood out in another.
+
+        Parameters
+        ----------
+        report : RiskReport
+            This monitor's report of a frame.
+        earlier : sequence of (RiskReport, float)
+            This monitor's reports of the frames before it, the latest first, each with the
+            metres the ego moved forward since that frame (its speed times the interval;
+            negative when backing); the first :data:`EMERGED_FRAMES` are read. Empty for
+            the first frame.
+
+        Returns
+        -------
+        ndarray of shape (k,) or None
+            One share per row of ``report.unseen``, NaN where no frame before can tell (a
+            first frame, frames without a view, the paper's view, too little of the object
+            in their images); None where ``report.unseen`` is None.
+        """
+        retriever = self._retriever if isinstance(self._retriever, GeometricRetriever) else None
+        return unseen_emerged(report, earlier, retriever)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -342,33 +396,34 @@ class RiskMonitor:
         t0 = time.perf_counter()
         try:
             depth, boxes = self.check_frame(depth, detections, scores)
-            S, extents, free, blind = self._depth_view(depth)
+            seen = self._depth_view(depth)
         except (InvalidFrameError, InvalidDepthError) as exc:
             return self._invalid(str(exc), timings)
         t1 = time.perf_counter()
         timings["retrieval"] = t1 - t0
-        P = self._project(boxes)
+        S, P = seen.S, self._project(boxes)
         t2 = time.perf_counter()
         timings["projection"] = t2 - t1
         chosen = self.config.alignment
         alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching,
                           chosen.objects, self.config.max_range)
-        unseen = extents[~alignment.matched]
+        unseen = seen.extents[~alignment.matched]
+        unseen_points = tuple(p for p, m in zip(seen.points, alignment.matched) if not m)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
-        if blind:
-            return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=blind,
+        if seen.blind:
+            return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=seen.blind,
                               S=S, P=P, alignment=alignment, timings=timings)
+        free, view = seen.free, {"unseen": unseen, "unseen_points": unseen_points, "blocks": seen.blocks}
         if alignment.n_terms == 0:
-            seen = "" if np.isnan(free) else " (the corridor is free to its end)"
+            free_note = "" if np.isnan(free) else " (the corridor is free to its end)"
             detected = " and no detection" if alignment.objects == "known" else ""
             return RiskReport(risk=self.config.risk.no_objects, status=NO_OBJECTS,
                               reason=f"no safety-critical object{detected} within "
-                                     f"{self.config.max_range:g} m{seen}: risk.no_objects = "
+                                     f"{self.config.max_range:g} m{free_note}: risk.no_objects = "
                                      f"{self.config.risk.no_objects:g}, the configured risk of an "
                                      "empty view (not a measured zero)",
-                              S=S, P=P, alignment=alignment, free_distance=free, unseen=unseen,
-                              timings=timings)
+                              S=S, P=P, alignment=alignment, free_distance=free, timings=timings, **view)
         iou, rdd = alignment.iou_mean, alignment.rdd_mean
         args = (iou, rdd) if self._iou_first else (rdd, iou)
         if self.explain:  # one inference either way: the explanation carries the output
@@ -382,7 +437,27 @@ class RiskMonitor:
                               reason=f"no rule of {self.fis.name!r} fired for IoU~ = {iou:.6g}, "
                                      f"RDD~ = {rdd:.6g}: the rule base has no answer there",
                               iou=iou, rdd=rdd, S=S, P=P, alignment=alignment, free_distance=free,
-                              unseen=unseen, timings=timings)
+                              timings=timings, **view)
         return RiskReport(risk=float(risk), status=OK, iou=iou, rdd=rdd, S=S, P=P,
-                          alignment=alignment, fired=fired, free_distance=free, unseen=unseen,
-                          timings=timings)
+                          alignment=alignment, fired=fired, free_distance=free, timings=timings, **view)
+
+
+def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
+    """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever`` (None for the
+    paper's view): for code that has the reports but not the monitor (the dataset run's
+    output, which replays the shield in frame order)."""
+    if not isinstance(report, RiskReport):
+        raise ValueError(f"report is a {type(report).__name__}, expected a RiskReport")
+    for k, pair in enumerate(earlier):
+        if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], RiskReport)):
+            raise ValueError(f"earlier[{k}] is a {type(pair).__name__}, expected a (RiskReport, travel in "
+                             "metres) pair")
+    if report.unseen is None:
+        return None
+    shares = np.full(len(report.unseen), np.nan)
+    if retriever is None or not report.unseen_points:
+        return shares
+    for before, travel in list(earlier)[:EMERGED_FRAMES]:
+        if before.blocks is not None:
+            shares = np.fmin(shares, retriever.emerged(report.unseen_points, before.blocks, travel))
+    return shares

@@ -435,3 +435,47 @@ def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monit
     # no view, no answer: the shield must not read "nothing unseen" into an invalid frame
     assert geometric_monitor.step(np.full_like(scene_depth, np.nan), PEDESTRIAN).unseen is None
     assert json.loads(json.dumps(missed.to_dict()))["unseen"] == missed.unseen.tolist()
+
+
+def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric_monitor, monitor,
+                                                                       scene_depth):
+    none = np.zeros((0, 7))
+    missed = geometric_monitor.step(scene_depth, none)
+    road = geometric_monitor.step(_depth(none), none)
+    # a frame 0.5 m back saw the pedestrian 0.5 m farther: her blocks, put back, land on her
+    earlier = geometric_monitor.step(_depth(PEDESTRIAN + [0.5, 0, 0, 0, 0, 0, 0]), none)
+    assert geometric_monitor.emerged(missed, [(earlier, 0.5)])[0] < 0.05
+    # a frame that saw the empty road: the line of sight to one of her blocks, put back,
+    # meets the ground (z = 0) where the camera reads the road, or at the far depth (80 m)
+    # short of it, which the view takes for road while under min_height (0.2 m) above it;
+    # the line of sight of a block above the camera's height meets the sky (but in a block of
+    # the frame before that straddles the horizon, which reads its nearest depth: 0.05)
+    centre = CAMERA.cam_to_ego[:3, 3]
+    back = missed.unseen_points[0] + [0.5, 0.0, 0.0]
+    under = back[:, 2] < centre[2]
+    ground = centre + (back - centre) * (centre[2] / np.where(under, centre[2] - back[:, 2], np.nan))[:, None]
+    read_height = centre[2] * (1.0 - np.minimum(1.0, FAR_M / CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2]))
+    road_share = np.mean(under & (read_height < 0.2))
+    assert geometric_monitor.emerged(missed, [(road, 0.5)])[0] == pytest.approx(road_share, abs=0.05)
+    # the smallest share over the frames before: one that saw her is enough, in either place
+    assert geometric_monitor.emerged(missed, [(road, 0.5), (earlier, 0.5)])[0] < 0.05
+    assert geometric_monitor.emerged(missed, [(earlier, 0.5), (road, 1.0)])[0] < 0.05
+    # ... of the first EMERGED_FRAMES (2) only
+    assert geometric_monitor.emerged(missed, [(road, 0.5), (road, 1.0), (earlier, 0.5)])[0] == \
+        pytest.approx(road_share, abs=0.05)
+    # a detected pedestrian is not unseen: nothing to measure
+    assert geometric_monitor.emerged(geometric_monitor.step(scene_depth, PEDESTRIAN), [(road, 0.5)]).shape == (0,)
+    # not known: the first frame, frames before without a view, the paper's view
+    assert np.isnan(geometric_monitor.emerged(missed, [])).all()
+    blind = geometric_monitor.step(np.full_like(scene_depth, np.nan), none)
+    assert blind.blocks is None and np.isnan(geometric_monitor.emerged(missed, [(blind, 0.5)])).all()
+    paper = monitor.step(scene_depth, none)
+    assert np.isnan(monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)])).all()
+    # a frame without a view has no unseen objects to measure: None, as its unseen
+    assert geometric_monitor.emerged(blind, [(missed, 0.5)]) is None
+    with pytest.raises(ValueError, match=r"earlier\[0\] is a RiskReport, expected a \(RiskReport, travel"):
+        geometric_monitor.emerged(missed, [road])
+    with pytest.raises(ValueError, match="report is a dict, expected a RiskReport"):
+        geometric_monitor.emerged({}, [])
+    with pytest.raises(ValueError, match="travel = inf"):
+        geometric_monitor.emerged(missed, [(road, float("inf"))])
