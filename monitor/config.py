@@ -231,6 +231,13 @@ class ShieldConfig:
         row); what stands nearer reaches into the image's bottom rows, where the depth view
         cannot see the road beneath it, and a standing obstacle there was in view in the
         frame before. None: no such zone.
+    confirm_emerged : float in [0, 1] or None
+        With a path gate that confirms: an unseen object of which at least this share of
+        the blocks stood where each of the last two frames saw the road
+        (:meth:`monitor.RiskMonitor.emerged`, the geometric view's rule 9) counts only once
+        confirmed, wherever it stands. Something standing on the road was in view a frame
+        before (or hidden, or beside its place); a patch of road the depth reads too near
+        comes out of the road. None: not asked.
     memory : float > 0 or None
         With a path gate, seconds the shield remembers where the unseen objects that engaged
         it stand (on the road, the ego's travel allowed for). An unseen object seen where a
@@ -253,6 +260,7 @@ class ShieldConfig:
     confirm_width: float | None = 0.3
     emergency: float | None = 6.0
     confirm_near: float | None = 2.5
+    confirm_emerged: float | None = None
     memory: float | None = 1.0
 
     def __post_init__(self):
@@ -285,6 +293,8 @@ class ShieldConfig:
                 if not (math.isfinite(value) and value >= 0):
                     raise ValueError(f"{name} = {getattr(self, name)!r}, must be >= 0 metres (or null: {null})")
                 _set(self, name, value)
+        if self.confirm_emerged is not None:
+            _set(self, "confirm_emerged", _unit(self.confirm_emerged, "confirm_emerged"))
         for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
             value = _number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0):

@@ -51,6 +51,16 @@ was in view a frame before, and one stepping in from the side was seen beside th
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
 car anyway.
 
+With ``confirm_emerged`` an object that came out of the road must be confirmed too,
+wherever it stands: one of which that share of the blocks stood where each of the last two
+frames saw the road (``emerged``, :meth:`monitor.RiskMonitor.emerged`, the ego's travel
+since allowed for). A thing standing on the road was in the frames before, where it stood
+then, or hidden behind something, or beside its place (a pedestrian stepping out, a car
+cutting in); a patch of road the depth reads too near stood where they saw the road. Such a
+patch, wide and within the emergency reach, is what the at-once rule brakes hardest for; an
+obstacle that the network blended into the road in both frames before is confirmed when it
+is seen again.
+
 With ``memory`` the gate remembers where the unseen objects that engaged it stand, on the
 road (the ego's travel, integrated from its speed, taken off their distance), for
 ``memory`` seconds after each was last sighted. An unseen object seen where a remembered one
@@ -127,9 +137,11 @@ def describe_shield(config: ShieldConfig) -> str:
         which = "objects" if config.confirm_width is None else f"objects under {config.confirm_width:g} m"
         if config.confirm_width is not None:
             zones = ([] if config.emergency is None else ["beyond the emergency reach"]) + \
-                ([] if config.confirm_near is None else [f"within {config.confirm_near:g} m of the bumper"])
+                ([] if config.confirm_near is None else [f"within {config.confirm_near:g} m of the bumper"]) + \
+                ([] if config.confirm_emerged is None else [f"{100 * config.confirm_emerged:g} % out of the road"])
             if zones:
-                which += f" ({' and '.join(zones)}: all)"
+                listed = zones[0] if len(zones) == 1 else f"{', '.join(zones[:-1])} and {zones[-1]}"
+                which += f" ({listed}: all)"
         parts.append(f"{which} confirmed in {config.confirm_frames} of {config.confirm_window} frames")
     if config.path_half_width is not None and config.emergency is not None:
         parts.append(f"emergency {config.emergency:g} m/s^2")
@@ -193,7 +205,7 @@ class Shield:
         return speed * speed / (2.0 * decel) + speed * c.headway + c.margin
 
     def update(self, risk: float, speed: float | None = None, unseen=None,
-               time: float | None = None) -> ShieldDecision:
+               time: float | None = None, emerged=None) -> ShieldDecision:
         """The decision for the next frame.
 
         Parameters
@@ -208,6 +220,10 @@ class Shield:
         time : float, optional
             The frame's time, seconds, increasing; needed with a path gate that confirms
             (``confirm_frames > 1``, the default), ignored otherwise.
+        emerged : ndarray of shape (k,), optional
+            :meth:`monitor.RiskMonitor.emerged` of the frame's report: one share in [0, 1]
+            (or NaN: not known) per row of ``unseen``; None: not known for any. Read only
+            with a path gate that confirms and ``confirm_emerged``.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
@@ -215,7 +231,7 @@ class Shield:
         c = self.config
         decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
-            decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold)
+            decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged)
         cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
@@ -236,12 +252,13 @@ class Shield:
             counted = ()
         return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk, cause, counted)
 
-    def _in_path(self, speed, unseen, time, triggers: bool) -> tuple[float, float, str, tuple]:
+    def _in_path(self, speed, unseen, time, triggers: bool, emerged) -> tuple[float, float, str, tuple]:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
         ``confirm_width``, with ``emergency`` one beyond the emergency reach, and one within
-        ``confirm_near`` of the bumper count only once confirmed. Second, with a memory,
+        ``confirm_near`` of the bumper, and one whose ``emerged`` share reaches
+        ``confirm_emerged``, count only once confirmed. Second, with a memory,
         the deceleration the remembered objects call for where they stand now (0.0
         without); the counting objects of a frame that ``triggers`` (its risk above the
         threshold) are remembered. Third and fourth, why the first would engage the shield
@@ -257,6 +274,12 @@ class Shield:
             if unseen.ndim != 2 or unseen.shape[1] != 3 or not np.isfinite(unseen).all():
                 raise ValueError(f"unseen has shape {unseen.shape}: expected finite (k, 3) rows "
                                  "x, y_min, y_max (RiskReport.unseen)")
+        if emerged is not None:
+            emerged = np.asarray(emerged, dtype=np.float64)
+            k = None if unseen is None else unseen.shape[0]
+            if emerged.shape != (k,) or np.any(np.abs(emerged - 0.5) > 0.5):
+                raise ValueError(f"emerged = {emerged.tolist()}: expected one share in [0, 1] (or NaN) per "
+                                 f"row of unseen, shape ({k},) (RiskMonitor.emerged)")
         if c.confirm_frames > 1 or c.memory is not None:
             if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time) \
                     or (self._time is not None and not time > self._time):
@@ -275,7 +298,8 @@ class Shield:
         else:
             w = c.path_half_width
             x, y_min, y_max = unseen.T
-            near = unseen[(x - c.front <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)]
+            inside = (x - c.front <= self.reach(float(speed))) & (y_max >= -w) & (y_min <= w)
+            near = unseen[inside]
             urgent = np.zeros(near.shape[0], dtype=bool)
             if c.emergency is not None:
                 urgent = near[:, 0] - c.front <= self.reach(float(speed), c.emergency)
@@ -287,6 +311,8 @@ class Shield:
                     asked |= ~urgent
                 if c.confirm_near is not None:
                     asked |= near[:, 0] - c.front < c.confirm_near
+                if c.confirm_emerged is not None and emerged is not None:
+                    asked |= emerged[inside] >= c.confirm_emerged  # NaN: not known, not asked
             unconfirmed = asked.copy()
             if unconfirmed.any():
                 hits = np.zeros(near.shape[0], dtype=np.int64)

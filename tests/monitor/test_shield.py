@@ -219,6 +219,9 @@ def test_describe_names_the_shield():
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
          "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
          "remembered 1 s")
+    assert describe_shield(ShieldConfig(confirm_emerged=0.5)).startswith(
+        "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
+        "within 2.5 m of the bumper and 50 % out of the road: all) confirmed in 2 of 3 frames")
     assert describe_shield(ShieldConfig(emergency=None, memory=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
@@ -297,6 +300,36 @@ def test_near_the_bumper_every_object_is_confirmed_first():
         ShieldConfig(confirm_near=-1.0)
     with pytest.raises(ValueError, match="confirm_near = 'close', must be a number"):
         ShieldConfig(confirm_near="close")
+
+
+def test_what_came_out_of_the_road_is_confirmed_first():
+    asks = replace(STAGED, confirm_emerged=0.5)
+
+    def decelerations(config, frames, emerged):
+        shield = Shield(config)
+        return [shield.update(0.9, speed=10.0, unseen=u, time=0.1 * k, emerged=e).deceleration
+                for k, (u, e) in enumerate(zip(frames, emerged))]
+
+    # a wide object 15 m ahead of the bumper, within the emergency reach at 10 m/s (15.33 m),
+    # then 1 m nearer: at once, unless half of it or more stood where the frames before saw the
+    # road; then only once it stood there in 2 of 3 frames
+    wide = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
+    assert decelerations(asks, wide, [[0.8], [0.8]]) == [0.0, 6.0]
+    assert decelerations(asks, wide, [[0.5], [0.0]]) == [0.0, 6.0]
+    for known in ([0.49], [np.nan], None):  # under the share, or not known: at once
+        assert decelerations(asks, wide[:1], [known]) == [6.0]
+    # out of the road in a new place each frame (left, then right of the centreline): never
+    flicker = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
+    assert decelerations(asks, flicker, [[1.0], [1.0]]) == [0.0, 0.0]
+    # not asked without the setting
+    assert decelerations(replace(asks, confirm_emerged=None), wide[:1], [[1.0]]) == [6.0]
+    with pytest.raises(ValueError, match=r"emerged = \[0.5, 0.5\]: expected one share in \[0, 1\] \(or NaN\) per "
+                                         r"row of unseen, shape \(1,\)"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[0.5, 0.5])
+    with pytest.raises(ValueError, match=r"emerged = \[1.5\]"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[1.5])
+    with pytest.raises(ValueError, match=r"confirm_emerged = 2.0, must be in \[0, 1\]"):
+        ShieldConfig(confirm_emerged=2.0)
 
 
 def test_the_emergency_stage_is_checked_and_named():
