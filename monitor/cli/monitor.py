@@ -26,6 +26,7 @@ from tqdm import tqdm
 
 from monitor.cli.scenes import add_parallel_arguments, add_scene_arguments, run_spec, select_scenes
 from monitor.config import load_config
+from monitor.depth.geometric import GeometricRetriever
 from monitor.offline.parallel import check_workers
 from monitor.offline.run import process_chunks
 from monitor.offline.run_output import COLUMNS, RunOutput
@@ -74,8 +75,10 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     selection = select_scenes(args, None)
     spec = run_spec(args, selection, config, rules=args.rules or shipped_rules(), explain=not args.no_explain)
+    geometric = config.retrieval.method == "geometric"
     output = RunOutput(args.out, describe(args, spec, selection), selection.scenes, config.shield,
-                       overwrite=args.overwrite)
+                       overwrite=args.overwrite,
+                       retriever=GeometricRetriever(spec.camera, config.retrieval.geometric) if geometric else None)
     print(selection.note)
     if output.resumed:
         print(f"resuming {args.out}: {output.resumed} frames done, {output.remaining} to go")

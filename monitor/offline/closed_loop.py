@@ -20,8 +20,10 @@ Per step of ``dt`` seconds, in one :class:`~monitor.offline.scenarios.World`:
    ``release_frames`` frames (a track coasts through missed detections); otherwise it
    accelerates back to its cruise speed at ``comfort``;
 3. a **shielded** driver is the same driver plus the :class:`~monitor.RiskMonitor` on the same
-   frame and a :class:`~monitor.shield.Shield` (given the frame's time, the ego's speed and the
-   report's unseen objects, for a path-gated shield): the larger of the two decelerations wins;
+   frame and a :class:`~monitor.shield.Shield` (given the frame's time, the ego's speed, the
+   report's unseen objects and how much of each came out of the road of the frames before,
+   :meth:`~monitor.RiskMonitor.emerged`, for a path-gated shield): the larger of the two
+   decelerations wins;
 4. a command takes effect ``reaction`` seconds later (perception, decision and actuation).
 
 Drivers in one scenario (the baseline, the default shield, a sweep's settings) share the
@@ -69,7 +71,7 @@ from monitor.geometry.boxes3d import footprints
 from monitor.offline.attribution import what_lies_there
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
 from monitor.offline.tracking import Tracker
-from monitor.risk_monitor import RiskMonitor
+from monitor.risk_monitor import EMERGED_FRAMES, RiskMonitor
 from monitor.shield import Shield
 from monitor.synthetic import Condition, get_condition, render_depth
 from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, Detections, detect, estimate_depth
@@ -288,7 +290,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
-    `` n{confirm_near}`` when every object near the bumper is), `` e{emergency}`` for
+    `` n{confirm_near}`` when every object near the bumper is, `` o{confirm_emerged}`` when
+    every object out of the road is), `` e{emergency}`` for
     a gate with an emergency stage and `` m{memory}`` for one that remembers."""
     if config is None:
         return BASELINE
@@ -299,6 +302,8 @@ def driver_label(config: ShieldConfig | None) -> str:
             gate += f"<{config.confirm_width:.2f}"
             if config.confirm_near is not None:
                 gate += f" n{config.confirm_near:g}"
+            if config.confirm_emerged is not None:
+                gate += f" o{config.confirm_emerged:g}"
     if config.path_half_width is not None and config.emergency is not None:
         gate += f" e{config.emergency:g}"
     if config.path_half_width is not None and config.memory is not None:
@@ -420,16 +425,20 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
     # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
     streams = [seq.spawn(2) for seq in np.random.SeedSequence([int(spec.seed), 1]).spawn(n_steps)]
-    branches = [(world, members)]
+    # a world, its drivers, the monitor's reports of its last frames with the ego's travel since
+    branches = [(world, members, [])]
     onset = None
     for step in range(n_steps):
         next_branches = []
-        for world, group in branches:
+        for world, group, earlier in branches:
             frame = perception.frame(world, condition, streams[step])
             depth, dets, hazard_row = frame.depth, frame.detections, frame.hazard_row
             report = None
             if any(m.shield is not None for m in group):
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
+                earlier = [(r, travel + world.ego.speed * driver.dt) for r, travel in earlier]
+                emerged = monitor.emerged(report, earlier)
+                earlier = [(report, 0.0), *earlier][:EMERGED_FRAMES]
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and frame.visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and frame.distance <= max_range:
@@ -459,7 +468,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 engaged = False
                 if m.shield is not None:
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
-                                               time=world.time)
+                                               time=world.time, emerged=emerged)
                     if decision.engaged and not (m.run.history["engaged"] and m.run.history["engaged"][-1]):
                         m.run.engagements.append({"time": world.time, "speed": world.ego.speed,
                                                   "deceleration": decision.deceleration,
@@ -482,11 +491,11 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             for k, (key, part) in enumerate(parts.items()):
                 branch_world = world if k == len(parts) - 1 else copy.deepcopy(world)
                 if _advance(branch_world, key[0], part, driver):
-                    next_branches.append((branch_world, part))
+                    next_branches.append((branch_world, part, earlier))
         branches = next_branches
         if not branches:
             break
-    for world, group in branches:  # out of time
+    for world, group, _ in branches:  # out of time
         for m in group:
             _finish(m.run, world, "timeout")
     runs = [m.run for m in members]

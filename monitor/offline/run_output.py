@@ -17,12 +17,14 @@ not a run, is never written into without ``overwrite``; then only the run's own 
 (``run.json``, ``summary.md``, ``scenes/*.jsonl``, ``scenes/*.png``) are removed. The PNG and
 Markdown files are written whole or not at all (temporary file, then a rename).
 
-The shield runs here, over each scene's frames in order (it is the only part with state from
-frame to frame), given each frame's risk, time, the ego's speed and the report's unseen
-objects (for a path-gated shield); a resume replays it from the stored rows' ``risk``,
-``time``, ``ego_speed`` and ``unseen``. A frame that could not be processed has status
-``unprocessed``, its ``error``, no risk and no shield decision (the shield keeps its state
-across it).
+The shield runs here, over each scene's frames in order (it and what it compares from frame
+to frame are the only parts with state), given each frame's risk, time, the ego's speed, the
+report's unseen objects and what of them came out of the road since the frame before
+(:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a path-gated
+shield); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
+``unseen`` and ``emerged``. A frame that could not be processed has status ``unprocessed``,
+its ``error``, no risk and no shield decision (the shield keeps its state across it; the
+next frame has no frames before it to be compared with, as the first frame after a resume).
 """
 from __future__ import annotations
 
@@ -40,7 +42,8 @@ from monitor.config import ShieldConfig
 from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
-from monitor.risk_monitor import STATUSES
+from monitor.depth.geometric import GeometricRetriever
+from monitor.risk_monitor import EMERGED_FRAMES, STATUSES, unseen_emerged
 from monitor.shield import Shield
 
 RUN_FILE = "run.json"
@@ -60,7 +63,8 @@ def _number(x: float) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
 
 
-def report_row(result: FrameResult, engaged: bool | None, deceleration: float | None) -> dict:
+def report_row(result: FrameResult, engaged: bool | None, deceleration: float | None,
+               emerged: np.ndarray | None) -> dict:
     """The JSON line of one frame.
 
     Fields: ``scene``, ``frame`` (index), ``key`` (file stem), ``token`` (nuScenes sample or
@@ -71,8 +75,10 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
     ``counted``; ``objects``, then per detection ``det_iou``, ``det_rdd``, ``det_counted``,
     empty with ``objects`` "depth"; see :class:`monitor.alignment.Alignment`), ``target``
-    (1 - USC~; null without ground truth or none in range) and ``shield`` (``engaged``, ``deceleration`` m/s^2). An unprocessed
-    frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
+    (1 - USC~; null without ground truth or none in range), ``emerged`` (per unseen object,
+    the share of it that came out of the road since the frame before, null where not known;
+    null without a view: ``emerged``) and ``shield`` (``engaged``, ``deceleration`` m/s^2).
+    An unprocessed frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
     row = {"scene": result.scene, "frame": result.index, "key": result.key, "token": result.token,
            "time": result.timestamp, "ego_speed": result.ego_speed}
@@ -88,19 +94,25 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
                                         "det_iou": a.det_iou.tolist(), "det_rdd": a.det_rdd.tolist(),
                                         "det_counted": a.det_counted.tolist()}
     target = _number(ob.target) if result.has_ground_truth else None
-    return {**row, **report.to_dict(), "alignment": alignment, "target": target,
+    stored = None if emerged is None else [_number(e) for e in emerged.tolist()]
+    return {**row, **report.to_dict(), "alignment": alignment, "target": target, "emerged": stored,
             "shield": {"engaged": engaged, "deceleration": deceleration}}
 
 
 #: what a resume reads from a processed frame's line besides ``ego_speed``: what the shield
 #: replays from and the decision it must give again
-_REPLAYED = ("risk", "unseen", "shield")
+_REPLAYED = ("risk", "unseen", "emerged", "shield")
 
 
 def _stored_unseen(value):
     """A line's ``unseen`` as the shield takes it: None, or (k, 3) rows (an empty list read
     back from JSON has lost its shape)."""
     return np.empty((0, 3)) if isinstance(value, list) and not value else value
+
+
+def _stored_emerged(value):
+    """A line's ``emerged`` as the shield takes it: None, or (k,) shares with NaN for null."""
+    return None if value is None else np.array([np.nan if e is None else e for e in value], dtype=np.float64)
 
 
 def _digest_json(data) -> str:
@@ -123,6 +135,7 @@ class _Scene:
     engaged: list = field(default_factory=list)
     errors: list = field(default_factory=list)
     handle: object = None
+    earlier: list = field(default_factory=list)  # the last frames' reports, with the ego's travel since
 
     @property
     def complete(self) -> bool:
@@ -152,6 +165,9 @@ class RunOutput:
     shield : ShieldConfig
     overwrite : bool
         Start afresh even when ``out`` holds a run (its files are removed first).
+    retriever : GeometricRetriever, optional
+        The run's geometric view (its camera and configuration), for the unseen objects'
+        emerged shares; None for the paper's view (no shares: NaN).
 
     Raises
     ------
@@ -163,8 +179,9 @@ class RunOutput:
     """
 
     def __init__(self, out: str | Path, description: dict, plans: list[ScenePlan], shield: ShieldConfig,
-                 *, overwrite: bool = False):
+                 *, overwrite: bool = False, retriever: GeometricRetriever | None = None):
         self.out = Path(out)
+        self.retriever = retriever
         self.threshold = shield.threshold
         stems = {}
         for plan in plans:
@@ -244,7 +261,8 @@ class RunOutput:
         if processed:
             try:
                 decision = scene.shield.update(row["risk"], speed=row["ego_speed"],
-                                               unseen=_stored_unseen(row["unseen"]), time=row["time"])
+                                               unseen=_stored_unseen(row["unseen"]), time=row["time"],
+                                               emerged=_stored_emerged(row["emerged"]))
             except (ValueError, TypeError) as exc:
                 raise ValueError(f"{where}: the shield cannot replay this line ({exc}); pass --overwrite") \
                     from None
@@ -271,12 +289,16 @@ class RunOutput:
                 raise RuntimeError(f"result for {result.scene!r} frame {result.index} arrived when frame "
                                    f"{scene.done} was due (results must come in order)")
             if result.observation is None:
-                row = report_row(result, None, None)
+                row, scene.earlier = report_row(result, None, None, None), []
             else:
                 report = result.observation.report
+                step = result.ego_speed * (result.timestamp - scene.time[-1]) if scene.earlier else 0.0
+                earlier = [(r, s + step) for r, s in scene.earlier]
+                emerged = unseen_emerged(report, earlier, self.retriever)
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
-                                               time=result.timestamp)
-                row = report_row(result, decision.engaged, decision.deceleration)
+                                               time=result.timestamp, emerged=emerged)
+                row = report_row(result, decision.engaged, decision.deceleration, emerged)
+                scene.earlier = [(report, 0.0), *earlier][:EMERGED_FRAMES]
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)
             rows.append(row)

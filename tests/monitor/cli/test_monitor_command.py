@@ -47,11 +47,15 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
     assert [r["frame"] for r in rows] == list(range(N_FRAMES))
     config = load_config()
     mon = RiskMonitor(fuzzcore.load(shipped_rules()), load_prior(prior), frames[0].camera, config)
-    shield = Shield(config.shield)
+    shield, earlier, last = Shield(config.shield), [], None  # the frames before: (report, travel since)
     for frame, row in zip(frames, rows):
         report = mon.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
+        earlier = [(r, s + frame.ego_speed * (frame.timestamp - last)) for r, s in earlier]
+        emerged = mon.emerged(report, earlier)
         decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen,
-                                 time=frame.timestamp)
+                                 time=frame.timestamp, emerged=emerged)
+        earlier, last = [(report, 0.0), *earlier][:2], frame.timestamp
+        assert row["emerged"] == [None if np.isnan(e) else e for e in emerged.tolist()]
         assert (row["risk"], row["status"], row["time"], row["ego_speed"], row["key"]) == (
             report.risk, report.status, frame.timestamp, frame.ego_speed, f"{frame.index:06d}")
         assert row["S"] == report.S.tolist() and row["P"] == report.P.tolist()
@@ -70,6 +74,9 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
                 assert row["rdd"] == pytest.approx((unseen.sum() + np.array(stored["det_rdd"])[counted].sum()) / n)
         assert row["target"] is None or 0.0 <= row["target"] <= 1.0
     assert any(r["status"] == "ok" for r in rows)
+    # from the second frame on, what each unseen object has of the road of the frame before
+    assert rows[0]["emerged"] == [None] * len(rows[0]["unseen"])
+    assert any(e is not None for r in rows[1:] for e in r["emerged"])
     # drive-b has no ground_truth.jsonl: no target, never a made-up one
     assert all(r["target"] is None for r in read_rows(serial_run)["drive-b.jsonl"])
 
@@ -202,6 +209,10 @@ def _unseen(row: dict):
     return None if row["unseen"] is None else np.array(row["unseen"], dtype=np.float64).reshape(-1, 3)
 
 
+def _emerged(row: dict):
+    return None if row["emerged"] is None else np.array([np.nan if e is None else e for e in row["emerged"]])
+
+
 def _gated_argv(recording, out, config, *extra):
     # drive-b (3 frames, one chunk) first: its frames are where the gate decides (see below)
     root, _, prior = recording
@@ -234,7 +245,7 @@ def test_a_gated_shield_gets_each_frames_speed_and_unseen_objects(recording, ser
             # the gate changes the decisions only, never the reports
             assert {k: v for k, v in row.items() if k != "shield"} == \
                 {k: v for k, v in other.items() if k != "shield"}
-            decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row))
+            decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row), emerged=_emerged(row))
             assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
             assert row["shield"]["engaged"] is gated_engaged(row, c)
     # drive-b (rain) moves at 4.4 m/s with high risk from objects beside its path or beyond its
