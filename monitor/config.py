@@ -233,7 +233,7 @@ class ShieldConfig:
         frame before. None: no such zone.
     confirm_emerged : float in [0, 1] or None
         With a path gate that confirms: an unseen object of which at least this share of
-        the blocks stood where each of the last two frames saw the road
+        the blocks stood where each of the last two frames saw through to the road beyond
         (:meth:`monitor.RiskMonitor.emerged`, the geometric view's rule 9) counts only once
         confirmed, wherever it stands. Something standing on the road was in view a frame
         before (or hidden, or beside its place); a patch of road the depth reads too near

@@ -122,9 +122,10 @@ class RiskReport:
         Per unseen object (rows as ``unseen``), its blocks in the ego frame
         (:attr:`monitor.depth.geometric.GeometricView.points`); empty for the paper's view
         and frames without a view. :meth:`RiskMonitor.emerged` reads them.
-    blocks : ndarray of shape (H / stride, W / stride), int8, or None
-        What the geometric view saw in each block of pixels, the road or not
-        (:attr:`monitor.depth.geometric.GeometricView.blocks`): a later frame's ``before``
+    road_depth : ndarray of shape (H / stride, W / stride), float16, or None
+        How far the geometric view saw the road in each block of pixels (0 where it saw
+        something else, NaN where nothing valid;
+        :attr:`monitor.depth.geometric.GeometricView.road_depth`): a later frame's ``before``
         in :meth:`RiskMonitor.emerged`; None for the paper's view and frames without a view.
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
@@ -143,7 +144,7 @@ class RiskReport:
     free_distance: float = float("nan")
     unseen: np.ndarray | None = None
     unseen_points: tuple = ()
-    blocks: np.ndarray | None = None
+    road_depth: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -173,15 +174,15 @@ class _DepthView(NamedTuple):
     frame (m, 3) ``x, y_min, y_max`` (the geometric view measures it from its points, the
     paper's is back-projected from the box); the free distance ahead (NaN for the paper's
     view); why the view cannot see through the frame ("" when it can); each S's blocks in the
-    ego frame and the view's blocks (the geometric view's rule 9; empty and None for the
-    paper's)."""
+    ego frame and the road it saw per block (the geometric view's rule 9; empty and None for
+    the paper's)."""
 
     S: np.ndarray
     extents: np.ndarray
     free: float
     blind: str
     points: tuple
-    blocks: np.ndarray | None
+    road_depth: np.ndarray | None
 
 
 class RiskMonitor:
@@ -281,18 +282,18 @@ class RiskMonitor:
             except BlindViewError as exc:
                 return _DepthView(np.zeros((0, 5)), np.zeros((0, 3)), float("nan"), str(exc), (), None)
             return _DepthView(view.boxes, view.extents, view.free_distance, check_view(depth, self._visibility),
-                              view.points, view.blocks)
+                              view.points, view.road_depth)
         S = self._retriever(depth)
         return _DepthView(S, self.camera.ground_extents(S), float("nan"), check_view(depth, self._visibility),
                           (), None)
 
     def emerged(self, report: RiskReport, earlier) -> np.ndarray | None:
-        """Per unseen object of ``report``, the smallest share of its blocks that one of the
-        frames before saw as road (the geometric view's rule 9,
+        """Per unseen object of ``report``, the smallest share of its blocks behind whose
+        place one of the frames before saw the road (the geometric view's rule 9,
         :meth:`monitor.depth.geometric.GeometricRetriever.emerged`): the shield's
         ``emerged`` (``confirm_emerged``). A patch of road that the depth reads too near in
-        one frame stood where each frame before saw the road; an obstacle that the network
-        blended into the road in one of them stood out in another.
+        one frame stood where each frame before looked through to the road farther on; an
+        obstacle that the network blended into the road in one of them stood out in another.
 
         Parameters
         ----------
@@ -414,7 +415,8 @@ class RiskMonitor:
         if seen.blind:
             return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=seen.blind,
                               S=S, P=P, alignment=alignment, timings=timings)
-        free, view = seen.free, {"unseen": unseen, "unseen_points": unseen_points, "blocks": seen.blocks}
+        free = seen.free
+        view = {"unseen": unseen, "unseen_points": unseen_points, "road_depth": seen.road_depth}
         if alignment.n_terms == 0:
             free_note = "" if np.isnan(free) else " (the corridor is free to its end)"
             detected = " and no detection" if alignment.objects == "known" else ""
@@ -442,6 +444,34 @@ class RiskMonitor:
                           alignment=alignment, fired=fired, free_distance=free, timings=timings, **view)
 
 
+def shift_earlier(earlier, report: RiskReport, moved: float) -> tuple[list, list]:
+    """The frames before ``report`` as :meth:`RiskMonitor.emerged` reads them, and as the
+    next frame will: the one bookkeeping of a frame loop (it returns new lists, so a
+    simulation that branches may share them).
+
+    Parameters
+    ----------
+    earlier : list of (RiskReport, float)
+        The last frames' reports, the latest first, each with the metres the ego moved
+        forward from it to the frame before ``report``; empty at the start of a drive.
+    report : RiskReport
+        This frame's report.
+    moved : float
+        Metres the ego moved forward from the frame before to this one (its speed times the
+        interval; negative when backing).
+
+    Returns
+    -------
+    before : list of (RiskReport, float)
+        ``earlier`` with ``moved`` added to each: ``emerged``'s ``earlier`` for ``report``.
+    kept : list of (RiskReport, float)
+        ``report`` (0 m) then ``before``, the first :data:`EMERGED_FRAMES`: ``earlier`` for
+        the next frame.
+    """
+    before = [(r, travel + moved) for r, travel in earlier]
+    return before, [(report, 0.0), *before][:EMERGED_FRAMES]
+
+
 def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
     """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever`` (None for the
     paper's view): for code that has the reports but not the monitor (the dataset run's
@@ -458,6 +488,6 @@ def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | 
     if retriever is None or not report.unseen_points:
         return shares
     for before, travel in list(earlier)[:EMERGED_FRAMES]:
-        if before.blocks is not None:
-            shares = np.fmin(shares, retriever.emerged(report.unseen_points, before.blocks, travel))
+        if before.road_depth is not None:
+            shares = np.fmin(shares, retriever.emerged(report.unseen_points, before.road_depth, travel))
     return shares

@@ -53,13 +53,13 @@ car anyway.
 
 With ``confirm_emerged`` an object that came out of the road must be confirmed too,
 wherever it stands: one of which that share of the blocks stood where each of the last two
-frames saw the road (``emerged``, :meth:`monitor.RiskMonitor.emerged`, the ego's travel
-since allowed for). A thing standing on the road was in the frames before, where it stood
-then, or hidden behind something, or beside its place (a pedestrian stepping out, a car
-cutting in); a patch of road the depth reads too near stood where they saw the road. Such a
-patch, wide and within the emergency reach, is what the at-once rule brakes hardest for; an
-obstacle that the network blended into the road in both frames before is confirmed when it
-is seen again.
+frames saw through to the road beyond (``emerged``, :meth:`monitor.RiskMonitor.emerged`,
+the ego's travel since allowed for). A thing standing on the road was in the frames
+before, where it stood then, or hidden behind something, or beside its place (a pedestrian
+stepping out, a car cutting in); a patch of road the depth reads too near stood where they
+saw the road farther on. Such a patch, wide and within the emergency reach, is what the
+at-once rule brakes hardest for; an obstacle that the network blended into the road in
+both frames before is confirmed when it is seen again.
 
 With ``memory`` the gate remembers where the unseen objects that engaged it stand, on the
 road (the ego's travel, integrated from its speed, taken off their distance), for

@@ -32,7 +32,7 @@ from monitor.offline.measures import frame_truth, quality_tables, training_mean
 from monitor.report.quality_figure import save_quality_figure
 from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk_timeline
 from monitor.report.retrieval_figure import save_retrieval_figure
-from monitor.risk_monitor import EMERGED_FRAMES, INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor
+from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor, shift_earlier
 from monitor.shield import Shield, describe_shield
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
@@ -142,10 +142,10 @@ def run(args: argparse.Namespace) -> int:
         earlier = []  # the reports of the last frames, with the ego's travel since
         for frame in scene.frames:
             ob = observe(monitor, frame, scene.name, scene.condition)
-            earlier = [(r, s + frame.ego_speed * (frame.timestamp - times[-1])) for r, s in earlier]
+            moved = frame.ego_speed * (frame.timestamp - times[-1]) if times else 0.0
+            before, earlier = shift_earlier(earlier, ob.report, moved)
             decision = shield.update(ob.report.risk, speed=frame.ego_speed, unseen=ob.report.unseen,
-                                     time=frame.timestamp, emerged=monitor.emerged(ob.report, earlier))
-            earlier = [(ob.report, 0.0), *earlier][:EMERGED_FRAMES]
+                                     time=frame.timestamp, emerged=monitor.emerged(ob.report, before))
             obs_by_condition.setdefault(scene.condition, []).append(ob)
             split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None

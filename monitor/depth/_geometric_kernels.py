@@ -260,9 +260,9 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
     (flat uint8) gets 1 where ``min_height <= h <= max_height`` and ``d <= max_range``;
     ``corridor`` gets 1 where a block is an obstacle and its lateral offset from the
     centreline is at most ``half_width``; ``tall`` gets 1 where ``h > tall_height`` (inf:
-    never); ``road`` (flat int8) 1 where ``-below_margin <= h < min_height``, 0 for the
-    other valid blocks and -1 for the invalid ones. Returns ``(valid blocks, blocks with
-    h < -below_margin)``.
+    never); ``road`` (flat float32) the depth ``d`` where ``-below_margin <= h < min_height``,
+    0 for the other valid blocks and NaN for the invalid ones. Returns ``(valid blocks,
+    blocks with h < -below_margin)``.
     """
     n_valid = 0
     n_below = 0
@@ -271,14 +271,14 @@ def classify(xs, ys, zs, ds, a, b, c, min_height, max_height, max_range, below_m
         obstacle[k] = 0
         corridor[k] = 0
         tall[k] = 0
-        road[k] = -1
+        road[k] = np.nan
         if not d > 0.0:
             continue
         n_valid += 1
         x, y = xs[k], ys[k]
         h = zs[k] - (a * x + b * y + c)
         n_below += h < -below_margin
-        road[k] = h >= -below_margin and h < min_height
+        road[k] = d if h >= -below_margin and h < min_height else 0.0
         tall[k] = h > tall_height
         if h >= min_height and h <= max_height and d <= max_range:
             obstacle[k] = 1

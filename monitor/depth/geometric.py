@@ -100,22 +100,25 @@ in the manner of the stereo-vision obstacle detectors:
    foot of a face, not the road). An object of which no block rises keeps the extents of
    all its blocks: a flat object is still an object, one that must hide by its depth
    (rule 6; off when ``min_rise`` is None).
-9. **What comes out of the road was never there.** Given the blocks of an earlier frame
-   and how far the ego moved since (:meth:`GeometricRetriever.emerged`), each object's
-   blocks (:attr:`GeometricView.points`) are put back where they stood then (the ego's
-   travel added to their x) and looked up in that frame's :attr:`~GeometricView.blocks`:
-   what it saw there, the road, something else, or nothing valid. A thing standing
-   on the road was in the earlier frame too, where it stood then (or hidden behind
-   something, or beside its place: a pedestrian stepping out, a car cutting in, moving a
-   fraction of its width between frames); a patch of road that the depth reads too near in
-   one frame stood where that frame saw the road. ``emerged`` is the share of an object's
-   blocks that the earlier frame saw as road, among those that land on one of its valid
-   blocks; it is evidence, not a verdict (a dark obstacle that the network blended into
-   the road in one frame reappears from it in the next): the monitor takes the smallest
-   share over the last two frames (:meth:`monitor.RiskMonitor.emerged`) and the shield asks
-   such an object to be confirmed before it brakes for it (:class:`monitor.shield.Shield`,
-   ``confirm_emerged``). It is the free space of Elfes' occupancy grids, a cell seen empty
-   before, asked of the frames just before.
+9. **What comes out of the road was never there.** Given the road an earlier frame saw
+   (:attr:`GeometricView.road_depth`) and how far the ego moved since
+   (:meth:`GeometricRetriever.emerged`), each object's blocks (:attr:`GeometricView.points`)
+   are put back where they stood then (the ego's travel added to their x) and projected
+   into that frame: did its line of sight pass through the block's place to the road
+   beyond? A thing standing on the road was in the earlier frame too, where it stood then
+   (or hidden behind something, or beside its place: a pedestrian stepping out, a car
+   cutting in, moving a fraction of its width between frames): that frame saw it there,
+   or something nearer; a patch of road that the depth reads too near in one frame stood
+   where the frame before saw the road, farther. ``emerged`` is the share of an object's
+   blocks behind whose place the earlier frame saw the road, farther by more than
+   ``EMERGED_MARGIN`` (the depth's frame-to-frame scatter on a thing that stood there),
+   among those that land on one of its valid blocks. It is evidence, not a verdict (a dark
+   obstacle that the network blended into the road in one frame reappears from it in the
+   next): the monitor takes the smallest share over the last two frames
+   (:meth:`monitor.RiskMonitor.emerged`) and the shield asks such an object to be
+   confirmed before it brakes for it (:class:`monitor.shield.Shield`, ``confirm_emerged``).
+   It is the free space of Elfes' occupancy grids, a cell seen through before, asked of
+   the frames just before.
 
 The result is the set S as the paper's view gives it: float64 (m, 5) rows ``cx, cy, w, h,
 d`` (pixels, metres), nearest first, plus what a report needs (:class:`GeometricView`): the
@@ -178,8 +181,11 @@ LEDGE_ELONGATION = 2.0
 #: an object's ``emerged`` share is NaN when fewer of its blocks than this land on valid
 #: blocks of the earlier frame (it was out of its image, or its depth there was invalid)
 MIN_EMERGED_BLOCKS = 3
-#: what a block showed (:attr:`GeometricView.blocks`)
-BLOCK_INVALID, BLOCK_OTHER, BLOCK_ROAD = -1, 0, 1
+#: a block came out of the road (rule 9) when the earlier frame saw the road behind its place
+#: farther than the block's camera depth there by more than this share; the depth's scatter
+#: from frame to frame on a thing that stood there: half its sightings within 6 %
+#: (docs/closed-loop.md, 28 November 2026)
+EMERGED_MARGIN = 0.1
 
 #: why a frame is blind: BlindViewError.reason -> the parameter whose limit it exceeded
 BLIND_REASONS = {
@@ -426,10 +432,11 @@ class GeometricView:
         Share of valid pixels among those looking at the corridor's road (1 if none do).
     below_ground_fraction : float
         Share of valid blocks more than ``below_margin`` under the plane used.
-    blocks : ndarray of shape (H / stride, W / stride), int8
-        What each block showed: ``BLOCK_ROAD`` (1; less than ``min_height`` above the plane
-        used and at most ``below_margin`` under it), ``BLOCK_OTHER`` (0; anything else
-        valid) or ``BLOCK_INVALID`` (-1; no valid pixel). A later frame's ``before``.
+    road_depth : ndarray of shape (H / stride, W / stride), float16
+        Per block, the camera depth (metres) of the road it showed (less than ``min_height``
+        above the plane used and at most ``below_margin`` under it); 0 where it showed
+        something else, NaN where it had no valid pixel. A later frame's ``before``
+        (rule 9); float16 (2-3 significant digits suffice, and a run keeps one per frame).
     points : tuple of ndarray of shape (n_i, 3), float64
         Per object (rows as ``boxes``), its blocks in the ego frame (``x, y, z``, metres),
         for :meth:`GeometricRetriever.emerged` (rule 9) in a later frame.
@@ -444,7 +451,7 @@ class GeometricView:
     valid_fraction: float
     corridor_valid_fraction: float
     below_ground_fraction: float
-    blocks: np.ndarray
+    road_depth: np.ndarray
     points: tuple
 
 
@@ -525,7 +532,7 @@ class GeometricRetriever:
             local.obstacle = np.empty((rows, cols), dtype=np.uint8)
             local.corridor = np.empty((rows, cols), dtype=np.uint8)
             local.tall = np.empty((rows, cols), dtype=np.uint8)
-            local.road = np.empty((rows, cols), dtype=np.int8)  # GeometricView.blocks
+            local.road = np.empty((rows, cols), dtype=np.float32)  # GeometricView.road_depth
             local.object_points = np.empty((rows * cols, 3), dtype=np.float64)
             local.labels = np.empty((rows, cols), dtype=np.int32)
             local.candidates = np.empty(rows * cols, dtype=np.int64)
@@ -643,19 +650,20 @@ class GeometricRetriever:
             valid_fraction=1.0 - invalid_fraction,
             corridor_valid_fraction=1.0 - corridor_invalid,
             below_ground_fraction=below,
-            blocks=scratch.road.copy(),
+            road_depth=scratch.road.astype(np.float16),
             points=points,
         )
 
     def emerged(self, points, before: np.ndarray, travel: float) -> np.ndarray:
-        """Rule 9: per object, the share of its blocks that an earlier frame saw as road.
+        """Rule 9: per object, the share of its blocks behind whose place an earlier frame
+        saw the road.
 
         Parameters
         ----------
         points : sequence of ndarray of shape (n_i, 3)
             Objects' blocks in the ego frame now (:attr:`GeometricView.points`, or some of them).
-        before : ndarray of shape (H / stride, W / stride), int8
-            The earlier frame's :attr:`GeometricView.blocks`.
+        before : ndarray of shape (H / stride, W / stride), float16
+            The earlier frame's :attr:`GeometricView.road_depth`.
         travel : float
             Metres the ego moved forward (along its x) since the earlier frame; negative
             when it backed.
@@ -663,14 +671,16 @@ class GeometricRetriever:
         Returns
         -------
         ndarray of shape (len(points),), float64
-            The share in [0, 1]; NaN where fewer than ``MIN_EMERGED_BLOCKS`` of the object's
-            blocks landed on valid blocks of ``before`` (out of its image, or invalid there).
+            The share in [0, 1] of the blocks, among those that land on valid blocks of
+            ``before``, that land on road farther than their own camera depth then by more
+            than ``EMERGED_MARGIN``; NaN where fewer than ``MIN_EMERGED_BLOCKS`` land on valid
+            blocks (out of its image, or invalid there).
         """
-        if not (isinstance(before, np.ndarray) and before.dtype == np.int8 and before.shape == self._blocks):
+        if not (isinstance(before, np.ndarray) and before.dtype == np.float16 and before.shape == self._blocks):
             what = f"an array of {before.dtype} {before.shape}" if isinstance(before, np.ndarray) \
                 else f"a {type(before).__name__}"
-            raise ValueError(f"before is {what}, expected the blocks of an earlier frame's view of this "
-                             f"camera (GeometricView.blocks: int8 {self._blocks})")
+            raise ValueError(f"before is {what}, expected the road an earlier frame's view of this camera "
+                             f"saw (GeometricView.road_depth: float16 {self._blocks})")
         if isinstance(travel, bool) or not isinstance(travel, numbers.Real) or not math.isfinite(travel):
             raise ValueError(f"travel = {travel!r}, expected the finite metres the ego moved since before's frame")
         m = len(points)
@@ -684,12 +694,12 @@ class GeometricRetriever:
         s = self.params.stride
         i, j = np.floor(uv[:, 1] / s), np.floor(uv[:, 0] / s)
         inside = (i >= 0) & (i < before.shape[0]) & (j >= 0) & (j < before.shape[1])
-        seen = before[i[inside].astype(np.int64), j[inside].astype(np.int64)]
+        road = before[i[inside].astype(np.int64), j[inside].astype(np.int64)].astype(np.float64)
         which = which[ahead][inside]
-        valid = np.bincount(which[seen != BLOCK_INVALID], minlength=m)
-        road = np.bincount(which[seen == BLOCK_ROAD], minlength=m)
+        valid = np.bincount(which[~np.isnan(road)], minlength=m)
+        beyond = np.bincount(which[road > cam[ahead][inside, 2] * (1.0 + EMERGED_MARGIN)], minlength=m)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(valid >= MIN_EMERGED_BLOCKS, road / valid, np.nan)
+            return np.where(valid >= MIN_EMERGED_BLOCKS, beyond / valid, np.nan)
 
     def _ledges(self, labels, keep, across, points, ground) -> np.ndarray:
         """Which components are ledges along the road (rule 7), bool (n,): among the kept

@@ -71,7 +71,7 @@ from monitor.geometry.boxes3d import footprints
 from monitor.offline.attribution import what_lies_there
 from monitor.offline.scenarios import EGO_CENTRE_M, ScenarioSpec, World, advance, build_world, reach
 from monitor.offline.tracking import Tracker
-from monitor.risk_monitor import EMERGED_FRAMES, RiskMonitor
+from monitor.risk_monitor import RiskMonitor, shift_earlier
 from monitor.shield import Shield
 from monitor.synthetic import Condition, get_condition, render_depth
 from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, Detections, detect, estimate_depth
@@ -436,9 +436,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
             report = None
             if any(m.shield is not None for m in group):
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
-                earlier = [(r, travel + world.ego.speed * driver.dt) for r, travel in earlier]
-                emerged = monitor.emerged(report, earlier)
-                earlier = [(report, 0.0), *earlier][:EMERGED_FRAMES]
+                before, earlier = shift_earlier(earlier, report, world.ego.speed * driver.dt)
+                emerged = monitor.emerged(report, before)
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and frame.visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and frame.distance <= max_range:

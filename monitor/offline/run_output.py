@@ -43,7 +43,7 @@ from monitor.offline.run import Chunk, FrameResult, ScenePlan
 from monitor.report.figures import save_risk_timeline
 from monitor.report.tables import format_table
 from monitor.depth.geometric import GeometricRetriever
-from monitor.risk_monitor import EMERGED_FRAMES, STATUSES, unseen_emerged
+from monitor.risk_monitor import STATUSES, shift_earlier, unseen_emerged
 from monitor.shield import Shield
 
 RUN_FILE = "run.json"
@@ -292,13 +292,12 @@ class RunOutput:
                 row, scene.earlier = report_row(result, None, None, None), []
             else:
                 report = result.observation.report
-                step = result.ego_speed * (result.timestamp - scene.time[-1]) if scene.earlier else 0.0
-                earlier = [(r, s + step) for r, s in scene.earlier]
-                emerged = unseen_emerged(report, earlier, self.retriever)
+                moved = result.ego_speed * (result.timestamp - scene.time[-1]) if scene.earlier else 0.0
+                before, scene.earlier = shift_earlier(scene.earlier, report, moved)
+                emerged = unseen_emerged(report, before, self.retriever)
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
                                                time=result.timestamp, emerged=emerged)
                 row = report_row(result, decision.engaged, decision.deceleration, emerged)
-                scene.earlier = [(report, 0.0), *earlier][:EMERGED_FRAMES]
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)
             rows.append(row)

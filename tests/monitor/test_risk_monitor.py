@@ -17,8 +17,9 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig
-from monitor.risk_monitor import (INVALID_INPUT, NO_OBJECTS, NO_VIEW, OK, STATUSES, InvalidFrameError,
-                                   RiskMonitor)
+from monitor.depth.geometric import EMERGED_MARGIN
+from monitor.risk_monitor import (EMERGED_FRAMES, INVALID_INPUT, NO_OBJECTS, NO_VIEW, OK, STATUSES,
+                                   InvalidFrameError, RiskMonitor, RiskReport, shift_earlier)
 from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
@@ -449,13 +450,17 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric
     # meets the ground (z = 0) where the camera reads the road, or at the far depth (80 m)
     # short of it, which the view takes for road while under min_height (0.2 m) above it;
     # the line of sight of a block above the camera's height meets the sky (but in a block of
-    # the frame before that straddles the horizon, which reads its nearest depth: 0.05)
+    # the frame before that straddles the horizon, which reads its nearest depth: 0.05). A
+    # block came out of the road where that road lies beyond it by more than the margin.
     centre = CAMERA.cam_to_ego[:3, 3]
     back = missed.unseen_points[0] + [0.5, 0.0, 0.0]
     under = back[:, 2] < centre[2]
     ground = centre + (back - centre) * (centre[2] / np.where(under, centre[2] - back[:, 2], np.nan))[:, None]
-    read_height = centre[2] * (1.0 - np.minimum(1.0, FAR_M / CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2]))
-    road_share = np.mean(under & (read_height < 0.2))
+    read = np.minimum(CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2], FAR_M)
+    read_height = centre[2] * (1.0 - read / CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2])
+    beyond = read > CAMERA.ego_to_camera(back)[:, 2] * (1.0 + EMERGED_MARGIN)
+    road_share = np.mean(under & (read_height < 0.2) & beyond)
+    assert 0.2 < road_share
     assert geometric_monitor.emerged(missed, [(road, 0.5)])[0] == pytest.approx(road_share, abs=0.05)
     # the smallest share over the frames before: one that saw her is enough, in either place
     assert geometric_monitor.emerged(missed, [(road, 0.5), (earlier, 0.5)])[0] < 0.05
@@ -468,7 +473,7 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric
     # not known: the first frame, frames before without a view, the paper's view
     assert np.isnan(geometric_monitor.emerged(missed, [])).all()
     blind = geometric_monitor.step(np.full_like(scene_depth, np.nan), none)
-    assert blind.blocks is None and np.isnan(geometric_monitor.emerged(missed, [(blind, 0.5)])).all()
+    assert blind.road_depth is None and np.isnan(geometric_monitor.emerged(missed, [(blind, 0.5)])).all()
     paper = monitor.step(scene_depth, none)
     assert np.isnan(monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)])).all()
     # a frame without a view has no unseen objects to measure: None, as its unseen
@@ -479,3 +484,16 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric
         geometric_monitor.emerged({}, [])
     with pytest.raises(ValueError, match="travel = inf"):
         geometric_monitor.emerged(missed, [(road, float("inf"))])
+
+
+def test_shift_earlier_adds_the_travel_and_keeps_the_last_frames():
+    a, b, c = (RiskReport(risk=r, status=OK) for r in (0.1, 0.2, 0.3))
+    start = []
+    before, kept = shift_earlier(start, a, 0.4)  # the first frame: nothing before it
+    assert before == [] and kept == [(a, 0.0)]
+    before, kept = shift_earlier(kept, b, 0.5)
+    assert before == [(a, 0.5)] and kept == [(b, 0.0), (a, 0.5)]
+    before, kept = shift_earlier(kept, c, -0.25)  # backing
+    assert before == [(b, -0.25), (a, 0.25)]
+    assert kept == [(c, 0.0), (b, -0.25)] and len(kept) == EMERGED_FRAMES
+    assert start == []  # new lists: a branching simulation may share them

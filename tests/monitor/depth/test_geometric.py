@@ -16,7 +16,7 @@ from scipy import ndimage
 
 from monitor.depth import _geometric_kernels as kernels
 from monitor.depth.geometric import (
-    BlindViewError, CORRIDOR_STEP_M, GeometricParams, GeometricRetriever, warmup,
+    BlindViewError, CORRIDOR_STEP_M, EMERGED_MARGIN, GeometricParams, GeometricRetriever, warmup,
 )
 from monitor.geometry.boxes import iou
 from monitor.geometry.camera import Camera
@@ -405,18 +405,20 @@ def test_what_stood_there_a_frame_before_did_not_come_out_of_the_road():
         # each object's blocks lie on its box (a block at its edge reads its nearest depth: 0.2 m)
         assert np.all(np.abs(points - [x, y, z]) <= np.array([length, w, h]) / 2 + 0.2)
     # the frame before, 1 m back: each object 1 m farther; its blocks, put back, land on it
-    before = retriever.view(_render([[b[0] + travel, *b[1:]] for b in boxes])[0]).blocks
+    before = retriever.view(_render([[b[0] + travel, *b[1:]] for b in boxes])[0]).road_depth
     assert np.all(retriever.emerged(now.points, before, travel) < 0.05)
-    # the frame before saw the empty road: its blocks show the road where the line of sight to
-    # a block put back meets the ground (z = 0) before the sky's 80 m, the sky elsewhere
-    empty = retriever.view(_render([])[0]).blocks
+    # the frame before saw the empty road: its line of sight to a block put back meets the
+    # ground (z = 0) before the sky's 80 m, or the sky; it saw the block's place free where
+    # it met the ground farther than the block by more than the margin
+    empty = retriever.view(_render([])[0]).road_depth
     centre = CAMERA.cam_to_ego[:3, 3]
     for points, share in zip(now.points, retriever.emerged(now.points, empty, travel)):
         back = points + [travel, 0.0, 0.0]
         below = back[:, 2] < centre[2]
         ground = centre + (back - centre) * (centre[2] / np.where(below, centre[2] - back[:, 2], np.nan))[:, None]
         depth = CAMERA.ego_to_camera(np.nan_to_num(ground))[:, 2]
-        assert share == pytest.approx(np.mean(below & (depth < _SKY)), abs=0.05)
+        beyond = depth > CAMERA.ego_to_camera(back)[:, 2] * (1.0 + EMERGED_MARGIN)
+        assert 0.2 < share == pytest.approx(np.mean(below & (depth < _SKY) & beyond), abs=0.05)
 
 
 def test_a_patch_of_road_read_too_near_came_out_of_the_road():
@@ -428,16 +430,23 @@ def test_a_patch_of_road_read_too_near_came_out_of_the_road():
     now = retriever.view(blob)
     assert now.boxes.shape == (1, 5)
     # the frame before read the road right: every block of the patch stood where it saw the road
-    assert retriever.emerged(now.points, retriever.view(road).blocks, travel).tolist() == [1.0]
+    assert retriever.emerged(now.points, retriever.view(road).road_depth, travel).tolist() == [1.0]
     # the same patch read in the frame before too (where the ego's travel puts it then): 0
     shifted = road.copy()
     shifted[680:760, 700:900] *= np.float32(0.6)
-    assert retriever.emerged(now.points, retriever.view(shifted).blocks, 0.0).tolist() == [0.0]
+    assert retriever.emerged(now.points, retriever.view(shifted).road_depth, 0.0).tolist() == [0.0]
+    # road seen behind the patch's place, but not farther than the margin: nothing emerged;
+    # farther than the margin behind its farthest block: all of it
+    depths = CAMERA.ego_to_camera(now.points[0])[:, 2]
+    within = np.full(now.road_depth.shape, depths.min() * (1.0 + 0.9 * EMERGED_MARGIN), dtype=np.float16)
+    beyond = np.full(now.road_depth.shape, depths.max() * (1.0 + 1.1 * EMERGED_MARGIN), dtype=np.float16)
+    assert retriever.emerged(now.points, within, 0.0).tolist() == [0.0]
+    assert retriever.emerged(now.points, beyond, 0.0).tolist() == [1.0]
     # where the frame before had no valid depth nothing can be told
-    blind = np.full(now.blocks.shape, -1, dtype=np.int8)
+    blind = np.full(now.road_depth.shape, np.nan, dtype=np.float16)
     assert np.isnan(retriever.emerged(now.points, blind, travel)).all()
     assert retriever.emerged((), blind, travel).shape == (0,)
-    with pytest.raises(ValueError, match=r"before is an array of int64 \(3, 3\), expected the blocks"):
+    with pytest.raises(ValueError, match=r"before is an array of int64 \(3, 3\), expected the road"):
         retriever.emerged(now.points, np.zeros((3, 3), dtype=np.int64), travel)
     with pytest.raises(ValueError, match="before is a list"):
         retriever.emerged(now.points, [[1]], travel)
@@ -709,7 +718,7 @@ def test_classify_equals_numpy():
     corridor = Corridor(1.75, curvature=0.02)
     centre, tan = corridor.table(40.0, CORRIDOR_STEP_M)
     obstacle, inside, tall = (np.empty(x.size, np.uint8) for _ in range(3))
-    road = np.empty(x.size, np.int8)
+    road = np.empty(x.size, np.float32)
     plane = (0.02, -0.01, 0.1)
     n_valid, n_below = kernels.classify(x, y, z, d, *plane, 0.2, 2.5, 20.0, 0.05, centre, tan,
                                         CORRIDOR_STEP_M, 1.75, 1.0, obstacle, inside, tall, road)
@@ -723,8 +732,8 @@ def test_classify_equals_numpy():
     np.testing.assert_array_equal(obstacle, expected)
     np.testing.assert_array_equal(inside, expected & (lateral <= 1.75))
     np.testing.assert_array_equal(tall, valid & (h > 1.0))
-    np.testing.assert_array_equal(road, np.where(valid, (h >= -0.05) & (h < 0.2), -1))
-    assert (road == 1).any() and (road == 0).any() and (road == -1).any()
+    np.testing.assert_array_equal(road, np.where(valid, np.where((h >= -0.05) & (h < 0.2), d, 0.0), np.nan))
+    assert (road > 0).any() and (road == 0).any() and np.isnan(road).any()
     assert 0 < tall.sum() < valid.sum()
     assert n_valid == valid.sum() and n_below == (valid & (h < -0.05)).sum()
     assert 0 < inside.sum() < expected.sum()
