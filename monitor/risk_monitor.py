@@ -120,13 +120,16 @@ class RiskReport:
         path-gated shield reads it (:class:`monitor.shield.Shield`).
     unseen_points : tuple of ndarray of shape (n_i, 3)
         Per unseen object (rows as ``unseen``), its blocks in the ego frame
-        (:attr:`monitor.depth.geometric.GeometricView.points`); empty for the paper's view
-        and frames without a view. :meth:`RiskMonitor.emerged` reads them.
+        (:attr:`monitor.depth.geometric.GeometricView.points`); empty for the paper's view,
+        frames without a view, and a monitor whose shield does not confirm what came out of
+        the road (``shield.confirm_emerged`` None: the blocks are not kept).
+        :meth:`RiskMonitor.emerged` reads them.
     road_depth : ndarray of shape (H / stride, W / stride), float16, or None
         How far the geometric view saw the road in each block of pixels (0 where it saw
         something else, NaN where nothing valid;
         :attr:`monitor.depth.geometric.GeometricView.road_depth`): a later frame's ``before``
-        in :meth:`RiskMonitor.emerged`; None for the paper's view and frames without a view.
+        in :meth:`RiskMonitor.emerged`; None for the paper's view, frames without a view, and
+        a monitor whose shield does not confirm what came out of the road.
     timings : dict of str to float
         Seconds spent per stage: ``retrieval`` (with the view check), ``projection``,
         ``alignment``, ``inference``.
@@ -234,7 +237,8 @@ class RiskMonitor:
         self._prior = prior
         chosen = self.config.retrieval
         if chosen.method == "geometric":
-            self._retriever = GeometricRetriever(camera, chosen.geometric)
+            self._retriever = GeometricRetriever(camera, chosen.geometric,
+                                                 keep_blocks=self.config.shield.confirm_emerged is not None)
             # the view's own blind checks and near objects say what blocked and no-ground say
             self._visibility = dataclasses.replace(self.config.visibility, blocked_share=1.0,
                                                    min_in_range_share=0.0, min_ground_ratio=0.0)
@@ -309,11 +313,13 @@ class RiskMonitor:
         -------
         ndarray of shape (k,) or None
             One share per row of ``report.unseen``, NaN where no frame before can tell (a
-            first frame, frames without a view, the paper's view, too little of the object
-            in their images); None where ``report.unseen`` is None.
+            first frame, frames without a view, too little of the object in their images);
+            None where ``report.unseen`` is None, and for every report of a monitor whose
+            shield does not confirm what came out of the road (``shield.confirm_emerged``
+            None: it keeps no blocks to measure it with; the paper's view never does).
         """
-        retriever = self._retriever if isinstance(self._retriever, GeometricRetriever) else None
-        return unseen_emerged(report, earlier, retriever)
+        measured = isinstance(self._retriever, GeometricRetriever) and self._retriever.keep_blocks
+        return unseen_emerged(report, earlier, self._retriever if measured else None)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -473,20 +479,23 @@ def shift_earlier(earlier, report: RiskReport, moved: float) -> tuple[list, list
 
 
 def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
-    """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever`` (None for the
-    paper's view): for code that has the reports but not the monitor (the dataset run's
-    output, which replays the shield in frame order)."""
+    """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever``, for code that
+    has the reports but not the monitor (the dataset run's output, which replays the shield
+    in frame order). ``retriever`` None: nothing is measured (None), as for the paper's view
+    and a monitor whose shield does not confirm what came out of the road."""
     if not isinstance(report, RiskReport):
         raise ValueError(f"report is a {type(report).__name__}, expected a RiskReport")
     for k, pair in enumerate(earlier):
         if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], RiskReport)):
             raise ValueError(f"earlier[{k}] is a {type(pair).__name__}, expected a (RiskReport, travel in "
                              "metres) pair")
-    if report.unseen is None:
+    if report.unseen is None or retriever is None:
         return None
+    if len(report.unseen_points) != len(report.unseen):
+        raise ValueError(f"report has {len(report.unseen)} unseen objects and the blocks of "
+                         f"{len(report.unseen_points)}: its monitor keeps them only when its config sets "
+                         "shield.confirm_emerged")
     shares = np.full(len(report.unseen), np.nan)
-    if retriever is None or not report.unseen_points:
-        return shares
     for before, travel in list(earlier)[:EMERGED_FRAMES]:
         if before.road_depth is not None:
             shares = np.fmin(shares, retriever.emerged(report.unseen_points, before.road_depth, travel))

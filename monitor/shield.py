@@ -222,8 +222,9 @@ class Shield:
             (``confirm_frames > 1``, the default), ignored otherwise.
         emerged : ndarray of shape (k,), optional
             :meth:`monitor.RiskMonitor.emerged` of the frame's report: one share in [0, 1]
-            (or NaN: not known) per row of ``unseen``; None: not known for any. Read only
-            with a path gate that confirms and ``confirm_emerged``.
+            (or NaN: not known) per row of ``unseen``; None: not measured, which a path gate
+            that confirms with ``confirm_emerged`` refuses for a frame with a view. Read
+            only by such a gate.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
@@ -274,6 +275,10 @@ class Shield:
             if unseen.ndim != 2 or unseen.shape[1] != 3 or not np.isfinite(unseen).all():
                 raise ValueError(f"unseen has shape {unseen.shape}: expected finite (k, 3) rows "
                                  "x, y_min, y_max (RiskReport.unseen)")
+        if emerged is None and unseen is not None and c.confirm_emerged is not None and c.confirm_frames > 1:
+            raise ValueError(f"emerged = None: a shield that confirms what came out of the road (confirm_emerged "
+                             f"= {c.confirm_emerged:g}) needs a share per unseen object, RiskMonitor.emerged "
+                             "of a monitor whose config sets shield.confirm_emerged too")
         if emerged is not None:
             emerged = np.asarray(emerged, dtype=np.float64)
             k = None if unseen is None else unseen.shape[0]
@@ -311,7 +316,7 @@ class Shield:
                     asked |= ~urgent
                 if c.confirm_near is not None:
                     asked |= near[:, 0] - c.front < c.confirm_near
-                if c.confirm_emerged is not None and emerged is not None:
+                if c.confirm_emerged is not None:
                     asked |= emerged[inside] >= c.confirm_emerged  # NaN: not known, not asked
             unconfirmed = asked.copy()
             if unconfirmed.any():

@@ -75,10 +75,10 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     selection = select_scenes(args, None)
     spec = run_spec(args, selection, config, rules=args.rules or shipped_rules(), explain=not args.no_explain)
-    geometric = config.retrieval.method == "geometric"
+    measured = config.shield.confirm_emerged is not None  # the workers' views keep their blocks
     output = RunOutput(args.out, describe(args, spec, selection), selection.scenes, config.shield,
                        overwrite=args.overwrite,
-                       retriever=GeometricRetriever(spec.camera, config.retrieval.geometric) if geometric else None)
+                       retriever=GeometricRetriever(spec.camera, config.retrieval.geometric) if measured else None)
     print(selection.note)
     if output.resumed:
         print(f"resuming {args.out}: {output.resumed} frames done, {output.remaining} to go")

@@ -20,8 +20,8 @@ Markdown files are written whole or not at all (temporary file, then a rename).
 The shield runs here, over each scene's frames in order (it and what it compares from frame
 to frame are the only parts with state), given each frame's risk, time, the ego's speed, the
 report's unseen objects and what of them came out of the road since the frame before
-(:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a path-gated
-shield); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
+(:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a shield that
+confirms it); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
 ``unseen`` and ``emerged``. A frame that could not be processed has status ``unprocessed``,
 its ``error``, no risk and no shield decision (the shield keeps its state across it; the
 next frame has no frames before it to be compared with, as the first frame after a resume).
@@ -77,7 +77,8 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     empty with ``objects`` "depth"; see :class:`monitor.alignment.Alignment`), ``target``
     (1 - USC~; null without ground truth or none in range), ``emerged`` (per unseen object,
     the share of it that came out of the road since the frame before, null where not known;
-    null without a view: ``emerged``) and ``shield`` (``engaged``, ``deceleration`` m/s^2).
+    null without a view, and in every frame of a run whose shield does not confirm what came
+    out of the road: ``emerged``) and ``shield`` (``engaged``, ``deceleration`` m/s^2).
     An unprocessed frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
     row = {"scene": result.scene, "frame": result.index, "key": result.key, "token": result.token,
@@ -167,7 +168,8 @@ class RunOutput:
         Start afresh even when ``out`` holds a run (its files are removed first).
     retriever : GeometricRetriever, optional
         The run's geometric view (its camera and configuration), for the unseen objects'
-        emerged shares; None for the paper's view (no shares: NaN).
+        emerged shares, given when the shield confirms what came out of the road (the
+        monitors' views then keep their blocks); None: no shares (``emerged`` null).
 
     Raises
     ------

@@ -16,10 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig
-from monitor.depth.geometric import EMERGED_MARGIN
+from monitor.config import MonitorConfig, RetrievalConfig, RiskConfig, ShieldConfig
+from monitor.depth.geometric import EMERGED_MARGIN, GeometricRetriever
 from monitor.risk_monitor import (EMERGED_FRAMES, INVALID_INPUT, NO_OBJECTS, NO_VIEW, OK, STATUSES,
-                                   InvalidFrameError, RiskMonitor, RiskReport, shift_earlier)
+                                   InvalidFrameError, RiskMonitor, RiskReport, shift_earlier, unseen_emerged)
 from monitor.shipped import shipped_rules
 from monitor.synthetic import render_depth
 
@@ -334,6 +334,13 @@ def geometric_monitor(fis, prior):
     return RiskMonitor(fis, prior, CAMERA, config)
 
 
+@pytest.fixture(scope="module")
+def emerging_monitor(fis, prior):
+    """The geometric view for a shield that confirms what came out of the road."""
+    config = MonitorConfig(retrieval=RetrievalConfig(method="geometric"), shield=ShieldConfig(confirm_emerged=0.5))
+    return RiskMonitor(fis, prior, CAMERA, config)
+
+
 def test_the_geometric_view_sees_the_pedestrian_where_the_detector_does(geometric_monitor, fis,
                                                                          scene_depth):
     report = geometric_monitor.step(scene_depth, PEDESTRIAN)
@@ -438,14 +445,14 @@ def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monit
     assert json.loads(json.dumps(missed.to_dict()))["unseen"] == missed.unseen.tolist()
 
 
-def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric_monitor, monitor,
-                                                                       scene_depth):
+def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_monitor, geometric_monitor,
+                                                                       monitor, scene_depth):
     none = np.zeros((0, 7))
-    missed = geometric_monitor.step(scene_depth, none)
-    road = geometric_monitor.step(_depth(none), none)
+    missed = emerging_monitor.step(scene_depth, none)
+    road = emerging_monitor.step(_depth(none), none)
     # a frame 0.5 m back saw the pedestrian 0.5 m farther: her blocks, put back, land on her
-    earlier = geometric_monitor.step(_depth(PEDESTRIAN + [0.5, 0, 0, 0, 0, 0, 0]), none)
-    assert geometric_monitor.emerged(missed, [(earlier, 0.5)])[0] < 0.05
+    earlier = emerging_monitor.step(_depth(PEDESTRIAN + [0.5, 0, 0, 0, 0, 0, 0]), none)
+    assert emerging_monitor.emerged(missed, [(earlier, 0.5)])[0] < 0.05
     # a frame that saw the empty road: the line of sight to one of her blocks, put back,
     # meets the ground (z = 0) where the camera reads the road, or at the far depth (80 m)
     # short of it, which the view takes for road while under min_height (0.2 m) above it;
@@ -461,29 +468,41 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(geometric
     beyond = read > CAMERA.ego_to_camera(back)[:, 2] * (1.0 + EMERGED_MARGIN)
     road_share = np.mean(under & (read_height < 0.2) & beyond)
     assert 0.2 < road_share
-    assert geometric_monitor.emerged(missed, [(road, 0.5)])[0] == pytest.approx(road_share, abs=0.05)
+    assert emerging_monitor.emerged(missed, [(road, 0.5)])[0] == pytest.approx(road_share, abs=0.05)
     # the smallest share over the frames before: one that saw her is enough, in either place
-    assert geometric_monitor.emerged(missed, [(road, 0.5), (earlier, 0.5)])[0] < 0.05
-    assert geometric_monitor.emerged(missed, [(earlier, 0.5), (road, 1.0)])[0] < 0.05
+    assert emerging_monitor.emerged(missed, [(road, 0.5), (earlier, 0.5)])[0] < 0.05
+    assert emerging_monitor.emerged(missed, [(earlier, 0.5), (road, 1.0)])[0] < 0.05
     # ... of the first EMERGED_FRAMES (2) only
-    assert geometric_monitor.emerged(missed, [(road, 0.5), (road, 1.0), (earlier, 0.5)])[0] == \
+    assert emerging_monitor.emerged(missed, [(road, 0.5), (road, 1.0), (earlier, 0.5)])[0] == \
         pytest.approx(road_share, abs=0.05)
     # a detected pedestrian is not unseen: nothing to measure
-    assert geometric_monitor.emerged(geometric_monitor.step(scene_depth, PEDESTRIAN), [(road, 0.5)]).shape == (0,)
-    # not known: the first frame, frames before without a view, the paper's view
-    assert np.isnan(geometric_monitor.emerged(missed, [])).all()
-    blind = geometric_monitor.step(np.full_like(scene_depth, np.nan), none)
-    assert blind.road_depth is None and np.isnan(geometric_monitor.emerged(missed, [(blind, 0.5)])).all()
-    paper = monitor.step(scene_depth, none)
-    assert np.isnan(monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)])).all()
+    assert emerging_monitor.emerged(emerging_monitor.step(scene_depth, PEDESTRIAN), [(road, 0.5)]).shape == (0,)
+    # not known: the first frame, frames before without a view
+    assert np.isnan(emerging_monitor.emerged(missed, [])).all()
+    blind = emerging_monitor.step(np.full_like(scene_depth, np.nan), none)
+    assert blind.road_depth is None and np.isnan(emerging_monitor.emerged(missed, [(blind, 0.5)])).all()
     # a frame without a view has no unseen objects to measure: None, as its unseen
-    assert geometric_monitor.emerged(blind, [(missed, 0.5)]) is None
+    assert emerging_monitor.emerged(blind, [(missed, 0.5)]) is None
+    # not measured: a monitor whose shield does not ask keeps no blocks (its risk and unseen
+    # objects the same), and the paper's view has none
+    plain = geometric_monitor.step(scene_depth, none)
+    assert plain.road_depth is None and plain.unseen_points == ()
+    assert (plain.risk, plain.unseen.tolist()) == (missed.risk, missed.unseen.tolist())
+    assert geometric_monitor.emerged(plain, [(geometric_monitor.step(_depth(none), none), 0.5)]) is None
+    paper = monitor.step(scene_depth, none)
+    assert monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)]) is None
+    # a report without blocks cannot be measured with a view's retriever
+    with pytest.raises(ValueError, match="report has 1 unseen objects and the blocks of 0: its monitor keeps"):
+        unseen_emerged(plain, [(road, 0.5)], GeometricRetriever(CAMERA))
+    with pytest.raises(ValueError, match="shield.confirm_emerged = 0.5 needs retrieval.method geometric, "
+                                         "not 'paper'"):
+        MonitorConfig(retrieval=RetrievalConfig(method="paper"), shield=ShieldConfig(confirm_emerged=0.5))
     with pytest.raises(ValueError, match=r"earlier\[0\] is a RiskReport, expected a \(RiskReport, travel"):
-        geometric_monitor.emerged(missed, [road])
+        emerging_monitor.emerged(missed, [road])
     with pytest.raises(ValueError, match="report is a dict, expected a RiskReport"):
-        geometric_monitor.emerged({}, [])
+        emerging_monitor.emerged({}, [])
     with pytest.raises(ValueError, match="travel = inf"):
-        geometric_monitor.emerged(missed, [(road, float("inf"))])
+        emerging_monitor.emerged(missed, [(road, float("inf"))])
 
 
 def test_shift_earlier_adds_the_travel_and_keeps_the_last_frames():

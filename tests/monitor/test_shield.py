@@ -316,7 +316,7 @@ def test_what_came_out_of_the_road_is_confirmed_first():
     wide = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
     assert decelerations(asks, wide, [[0.8], [0.8]]) == [0.0, 6.0]
     assert decelerations(asks, wide, [[0.5], [0.0]]) == [0.0, 6.0]
-    for known in ([0.49], [np.nan], None):  # under the share, or not known: at once
+    for known in ([0.49], [np.nan]):  # under the share, or not known: at once
         assert decelerations(asks, wide[:1], [known]) == [6.0]
     # out of the road in a new place each frame (left, then right of the centreline): never
     flicker = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
@@ -328,6 +328,11 @@ def test_what_came_out_of_the_road_is_confirmed_first():
         Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[0.5, 0.5])
     with pytest.raises(ValueError, match=r"emerged = \[1.5\]"):
         Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[1.5])
+    # not measured (a monitor whose config does not ask) is refused where there is a view
+    with pytest.raises(ValueError, match=r"emerged = None: a shield that confirms what came out of the road "
+                                         r"\(confirm_emerged = 0.5\) needs a share per unseen object"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0)
+    assert Shield(asks).update(0.9, speed=10.0, unseen=None, time=0.0).cause == "no view"
     with pytest.raises(ValueError, match=r"confirm_emerged = 2.0, must be in \[0, 1\]"):
         ShieldConfig(confirm_emerged=2.0)
 

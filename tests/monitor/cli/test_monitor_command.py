@@ -41,21 +41,39 @@ def serial_run(recording, tmp_path_factory):
     return out
 
 
-def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial_run):
-    root, frames, prior = recording
-    rows = read_rows(serial_run)["drive-a.jsonl"]
-    assert [r["frame"] for r in rows] == list(range(N_FRAMES))
-    config = load_config()
+@pytest.fixture(scope="module")
+def emerging_run(recording, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("emerging")
+    config = folder / "emerging.yaml"
+    config.write_text("shield:\n  confirm_emerged: 0.5\n")
+    assert main(_argv(recording, folder / "out", "--config", str(config))) == 0
+    return folder / "out", config
+
+
+def _replayed(frames, prior, config):
+    """The monitor and shield of ``config`` run on ``frames`` in order: per frame the
+    report, the emerged shares and the decision."""
     mon = RiskMonitor(fuzzcore.load(shipped_rules()), load_prior(prior), frames[0].camera, config)
-    shield, earlier, last = Shield(config.shield), [], None  # the frames before: (report, travel since)
-    for frame, row in zip(frames, rows):
+    shield, earlier, last, out = Shield(config.shield), [], None, []  # the frames before: (report, travel since)
+    for frame in frames:
         report = mon.step(frame.depth_est, frame.det_boxes3d, frame.det_scores)
         earlier = [(r, s + frame.ego_speed * (frame.timestamp - last)) for r, s in earlier]
         emerged = mon.emerged(report, earlier)
         decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen,
                                  time=frame.timestamp, emerged=emerged)
         earlier, last = [(report, 0.0), *earlier][:2], frame.timestamp
-        assert row["emerged"] == [None if np.isnan(e) else e for e in emerged.tolist()]
+        out.append((report, emerged, decision))
+    return out
+
+
+def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial_run):
+    root, frames, prior = recording
+    rows = read_rows(serial_run)["drive-a.jsonl"]
+    assert [r["frame"] for r in rows] == list(range(N_FRAMES))
+    for frame, row, (report, emerged, decision) in zip(frames, rows, _replayed(frames, prior, load_config()),
+                                                       strict=True):
+        # the shipped shield does not confirm what came out of the road: nothing measured
+        assert emerged is None and row["emerged"] is None
         assert (row["risk"], row["status"], row["time"], row["ego_speed"], row["key"]) == (
             report.risk, report.status, frame.timestamp, frame.ego_speed, f"{frame.index:06d}")
         assert row["S"] == report.S.tolist() and row["P"] == report.P.tolist()
@@ -74,11 +92,24 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
                 assert row["rdd"] == pytest.approx((unseen.sum() + np.array(stored["det_rdd"])[counted].sum()) / n)
         assert row["target"] is None or 0.0 <= row["target"] <= 1.0
     assert any(r["status"] == "ok" for r in rows)
-    # from the second frame on, what each unseen object has of the road of the frame before
-    assert rows[0]["emerged"] == [None] * len(rows[0]["unseen"])
-    assert any(e is not None for r in rows[1:] for e in r["emerged"])
     # drive-b has no ground_truth.jsonl: no target, never a made-up one
     assert all(r["target"] is None for r in read_rows(serial_run)["drive-b.jsonl"])
+
+
+def test_a_shield_that_confirms_what_came_out_of_the_road_gets_it_per_frame(recording, serial_run, emerging_run):
+    _, frames, prior = recording
+    out, config = emerging_run
+    rows = read_rows(out)["drive-a.jsonl"]
+    for row, plain, (_, emerged, decision) in zip(rows, read_rows(serial_run)["drive-a.jsonl"],
+                                                  _replayed(frames, prior, load_config(config)), strict=True):
+        assert row["emerged"] == [None if np.isnan(e) else e for e in emerged.tolist()]
+        assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
+        # the setting changes what is stored and decided, never the risk
+        assert {k: v for k, v in row.items() if k not in ("emerged", "shield")} == \
+            {k: v for k, v in plain.items() if k not in ("emerged", "shield")}
+    # from the second frame on, what each unseen object has of the road of the frames before
+    assert rows[0]["emerged"] == [None] * len(rows[0]["unseen"])
+    assert any(e is not None for r in rows[1:] for e in r["emerged"])
 
 
 def test_timelines_summary_and_run_file(serial_run):
@@ -95,7 +126,12 @@ def test_two_workers_give_the_serial_reports(recording, serial_run, tmp_path):
     assert read_rows(tmp_path / "pool") == read_rows(serial_run)
 
 
-def test_an_interrupted_run_resumes_to_the_same_lines(recording, serial_run, tmp_path, monkeypatch):
+@pytest.mark.parametrize("run", ["serial_run", "emerging_run"])
+def test_an_interrupted_run_resumes_to_the_same_lines(recording, run, request, tmp_path, monkeypatch):
+    # the shipped shield, and one that replays the stored emerged shares as well
+    done, extra = request.getfixturevalue(run), ()
+    if run == "emerging_run":
+        done, extra = done[0], ("--config", str(done[1]))
     out = tmp_path / "out"
     real = monitor_command.process_chunks
 
@@ -106,14 +142,14 @@ def test_an_interrupted_run_resumes_to_the_same_lines(recording, serial_run, tmp
 
     monkeypatch.setattr(monitor_command, "process_chunks", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        main(_argv(recording, out))
+        main(_argv(recording, out, *extra))
     assert len(read_rows(out)["drive-a.jsonl"]) == 8 and not (out / "scenes" / "drive-a.png").exists()
     # a torn last line, as a kill in the middle of a write leaves
     with open(out / "scenes" / "drive-a.jsonl", "a") as f:
         f.write('{"scene": "drive-a", "frame": 8, "ke')
     monkeypatch.setattr(monitor_command, "process_chunks", real)
-    assert main(_argv(recording, out)) == 0
-    assert read_rows(out) == read_rows(serial_run)
+    assert main(_argv(recording, out, *extra)) == 0
+    assert read_rows(out) == read_rows(done)
     assert (out / "scenes" / "drive-a.png").is_file()
 
 

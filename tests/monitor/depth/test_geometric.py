@@ -421,6 +421,17 @@ def test_what_stood_there_a_frame_before_did_not_come_out_of_the_road():
         assert 0.2 < share == pytest.approx(np.mean(below & (depth < _SKY) & beyond), abs=0.05)
 
 
+def test_a_view_without_its_blocks_is_the_same_view():
+    depth = _render([CAR_AHEAD, PEDESTRIAN])[0]
+    kept, lean = GeometricRetriever(CAMERA).view(depth), GeometricRetriever(CAMERA, keep_blocks=False).view(depth)
+    assert lean.road_depth is None and lean.points == ()
+    assert kept.road_depth.shape == (-(-CAMERA.height // 4), -(-CAMERA.width // 4)) and len(kept.points) == 2
+    for name in ("boxes", "extents", "free_distance", "ground", "valid_fraction"):
+        np.testing.assert_array_equal(getattr(lean, name), getattr(kept, name))
+    with pytest.raises(ValueError, match="keep_blocks = 1, expected True or False"):
+        GeometricRetriever(CAMERA, keep_blocks=1)
+
+
 def test_a_patch_of_road_read_too_near_came_out_of_the_road():
     rules_off = GeometricParams(max_incline=None, min_occlusion=None)  # so that the patch is an object
     retriever, travel = GeometricRetriever(CAMERA, rules_off), 1.2
