@@ -223,9 +223,10 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
               "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time).", "",
               "## Hazards (baseline collisions avoided by the shield)", "",
               "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
+              "of them slower at the onset | "
               "avoidable, detector missed: avoided | avoidable once in the path: avoided | unavoidable | "
               "impact v (shield) | shield-only | rear-ended |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     rows = []
     for kind, by_condition in summary["by_kind_condition"].items():
         if kind == "hazard-free":
@@ -235,6 +236,7 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
                         f"{_pct(m['shielded_collision_rate'])} | {_pct(m['avoidance_rate'])} | "
                         f"{_pct(m['avoidance_rate_avoidable'])} of {m['avoidable_collisions']}"
                         f"{_interval(m['avoidance_rate_avoidable_interval'])} | "
+                        f"{m['avoided_slower_at_onset']} | "
                         f"{_pct(m['avoidance_rate_avoidable_missed'])} of {m['avoidable_missed_collisions']}"
                         f"{_interval(m['avoidance_rate_avoidable_missed_interval'])} | "
                         f"{_pct(m['avoidance_rate_avoidable_in_path'])} of {m['avoidable_in_path_collisions']}"

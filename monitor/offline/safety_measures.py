@@ -11,7 +11,10 @@ baseline run of the same scenario:
   the onset to the collision: the monitor's case; a hazard the detector saw and the planner
   still hit is the planner's), and over the avoidable ones still avoidable when the hazard
   entered the ego's path (``Run.onset["entry"]``: those a shield can avoid without
-  foreseeing where the hazard goes); the mean impact speed of the collisions left; collisions
+  foreseeing where the hazard goes); how many of the avoidable ones it avoided with the car
+  slower at the hazard's onset than the baseline's (the shield had braked before the hazard
+  was in view, for something else: an avoidance that braking for nothing bought); the mean
+  impact speed of the collisions left; collisions
   only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
@@ -113,6 +116,7 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
     missed = [(b, s) for b, s in avoidable if b.onset["seen_frames"] < SEEN_SHARE * b.onset["frames"]]
     in_path = [(b, s) for b, s in avoidable if b.onset["entry"] is not None and b.onset["entry"]["avoidable"]]
     avoided = lambda group: sum(not s.collided for _, s in group)  # noqa: E731
+    slower = [(b, s) for b, s in avoidable if _speed_at(s, b.onset["time"]) < b.onset["speed"]]
     return {
         "runs": n,
         "baseline_collisions": len(base_hits),
@@ -123,6 +127,7 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "avoidable_collisions": len(avoidable),
         "avoidance_rate_avoidable": _rate(avoided(avoidable), len(avoidable)),
         "avoidance_rate_avoidable_interval": wilson_interval(avoided(avoidable), len(avoidable)),
+        "avoided_slower_at_onset": avoided(slower),
         "avoidable_missed_collisions": len(missed),
         "avoidance_rate_avoidable_missed": _rate(avoided(missed), len(missed)),
         "avoidance_rate_avoidable_missed_interval": wilson_interval(avoided(missed), len(missed)),
@@ -137,6 +142,14 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "rear_ended_shielded": sum(s.outcome == "rear-ended" for _, s in pairs),
         "rear_ended_baseline": sum(b.outcome == "rear-ended" for b, _ in pairs),
     }
+
+
+def _speed_at(run: Run, time: float) -> float:
+    """The ego's speed in ``run``'s frame at ``time`` (s), m/s; its last frame's if the run
+    ended before."""
+    times = run.history["time"]
+    k = int(np.searchsorted(times, time - 1e-9))
+    return float(run.history["speed"][min(k, len(times) - 1)])
 
 
 def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:

@@ -1,6 +1,7 @@
 """The closed loop with traffic: stopping distances by hand, detected and unseen obstacles,
 reproducibility, serial against parallel, and the measures on hand-made runs."""
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -9,6 +10,7 @@ import pytest
 pytest.importorskip("highway_env", reason="the closed loop needs the 'sim' extra (highway-env)")
 
 import fuzzcore  # noqa: E402
+from monitor.cli.simulate import markdown  # noqa: E402
 from monitor.config import load_config  # noqa: E402
 from monitor.depth.prior import build_prior  # noqa: E402
 from monitor.offline import safety_measures as sm  # noqa: E402
@@ -315,7 +317,9 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ())):
+         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ()),
+         speeds=(10.0, 10.0)):
+    # the hazard's onset at 1.0 s (the baseline at 10 m/s); ``speeds`` at 0.5 s and 1.0 s
     hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
     engagements = [{"cause": c, "objects": [], "on": []} for c in causes]
     if engagements:  # the first one's objects and what they lay on
@@ -323,7 +327,9 @@ def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged,
               engagements=engagements)
-    run.onset = {"avoidable": avoidable, "frames": 6, "seen_frames": seen, "entry": {"avoidable": in_path}}
+    run.history.update(time=[0.5, 1.0], speed=list(speeds))
+    run.onset = {"time": 1.0, "speed": 10.0, "avoidable": avoidable, "frames": 6, "seen_frames": seen,
+                 "entry": {"avoidable": in_path}}
     return run
 
 
@@ -332,12 +338,13 @@ def test_measures_by_hand():
     runs = [
         # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
         # seeds 0 and 2 are animals, 1 and 3 debris
+        # (seed 0 avoided, the car at 8 m/s at the animal's onset: the shield had braked before)
         _run("rare-object", 0, BASELINE, "collision", impact=10.0, what="animal"),
-        _run("rare-object", 0, shield, what="animal"),
+        _run("rare-object", 0, shield, what="animal", speeds=(9.0, 8.0)),
         # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen; it
         # could no longer be avoided once it entered the path
         _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3, in_path=False),
-        _run("rare-object", 1, shield, "collision", impact=4.0),
+        _run("rare-object", 1, shield, "collision", impact=4.0, speeds=(9.0, 9.5)),
         _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0, what="animal"),
         _run("rare-object", 2, shield, what="animal"),
         _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
@@ -358,6 +365,12 @@ def test_measures_by_hand():
     assert (h["baseline_collisions"], h["shielded_collisions"]) == (3, 1)
     assert h["avoidance_rate"] == pytest.approx(2 / 3)
     assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)  # seeds 0 and 1, seed 0 avoided
+    # seed 0 met its onset slower than the baseline; seed 1 too, but was not avoided
+    assert h["avoided_slower_at_onset"] == 1
+    # a drive that ended (stopped) before the onset's time is at its last speed then
+    assert sm._speed_at(_run("rare-object", 9, shield, speeds=(4.0, 0.0)), 5.0) == 0.0
+    table = markdown({**s, "command": "fuzzrisk simulate"}, [], shield, 7, 1.0, 1, None)
+    assert re.search(r"\| rare-object \| all \| 4 \| 75% \| 25% \| 67% \| 50% of 2 \[\d+%, \d+%\] \| 1 \| ", table)
     assert (h["avoidable_missed_collisions"], h["avoidance_rate_avoidable_missed"]) == (1, 1.0)  # seed 0
     assert (h["avoidable_in_path_collisions"], h["avoidance_rate_avoidable_in_path"]) == (1, 1.0)  # seed 0
     assert h["avoidance_rate_avoidable_in_path_interval"] == sm.wilson_interval(1, 1)
