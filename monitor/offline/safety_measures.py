@@ -13,9 +13,8 @@ baseline run of the same scenario:
   entered the ego's path (``Run.onset["entry"]``: those a shield can avoid without
   foreseeing where the hazard goes); how many of the avoidable ones it avoided with the car
   slower at the hazard's onset than the baseline's (the shield had braked before the hazard
-  was in view, for something else: an avoidance that braking for nothing bought); the mean
-  impact speed of the collisions left; collisions
-  only the shielded car had; rear-end collisions;
+  was in view, for something else); the mean impact speed of the collisions left;
+  collisions only the shielded car had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
   at once or once confirmed, a remembered one, a frame without a view) and what the nearest
