@@ -32,6 +32,11 @@ copied and each copy goes on with its drivers (:func:`run_scenario`). Frame ``k`
 depth and detector errors from the ``k``-th child of the seed's stream in every copy, so two
 drivers see the same noise in the same situation.
 
+A shield that had braked before the hazard came into view, for something else, meets it
+slower than the baseline does, and may avoid it for that alone. ``from_onset`` drives the
+first shield setting once more, switched on at the hazard's onset (below): what that car
+avoids, the shield avoids by what it does about the hazard.
+
 A run ends at a collision (of the ego's front: the hazard or whatever it hits; or the rear:
 the follower), when the ego stops or has passed the hazard (hazard kinds), when it arrives at
 the end of its route (hazard-free drives), or at the time limit.
@@ -78,6 +83,8 @@ from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, Detections, detect, es
 from monitor.synthetic.scene import EGO_FRONT_M, EGO_HALF_WIDTH_M
 
 BASELINE = "baseline"
+#: Appended to a shield's label for its drive switched on at the hazard's onset (``run_scenario``'s ``from_onset``).
+FROM_ONSET = " from onset"
 
 
 @dataclass(frozen=True)
@@ -377,18 +384,24 @@ class PerceivedFrame(NamedTuple):
 
 
 class _Member:
-    """One driver's state inside a branch."""
+    """One driver's state inside a branch; a shield ``from_onset`` acts only from the hazard's onset on."""
 
-    def __init__(self, run: Run, shield: Shield | None, driver: Driver, sensor: np.ndarray):
-        self.run, self.shield = run, shield
+    def __init__(self, run: Run, shield: Shield | None, driver: Driver, sensor: np.ndarray,
+                 from_onset: bool = False):
+        self.run, self.shield, self.from_onset = run, shield, from_onset
         self.tracker = Tracker(sensor) if driver.predict_s > 0 else None
         self.confirmed = self.missed = 0
         self.braking = False
         self.queue = deque([0.0] * driver.delay_steps)  # commands on their way to the brakes
 
+    def acting(self, onset: dict | None) -> bool:
+        """Does the member's shield decide in this frame (``onset``: the hazard's, None before it)?"""
+        return self.shield is not None and (onset is not None or not self.from_onset)
+
 
 def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonitor | None,
-                 shields=(), driver: Driver = Driver(), condition: Condition | None = None) -> list[Run]:
+                 shields=(), driver: Driver = Driver(), condition: Condition | None = None,
+                 from_onset: bool = False) -> list[Run]:
     """Drive one scenario with the baseline and with each shield setting.
 
     Parameters
@@ -401,15 +414,24 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     driver : Driver
     condition : Condition, optional
         Degradations to use instead of those named by ``spec.condition`` (a variant).
+    from_onset : bool
+        Also drive the first shield setting switched on at the hazard's onset: before it the
+        car drives as the baseline's does, and its shield starts afresh there (it knows none of
+        the frames before). What that car avoids, the shield avoids by what it did about the
+        hazard, not by having braked before for something else. Without a hazard (no onset)
+        it is the baseline's drive.
 
     Returns
     -------
     list of Run
-        The baseline first, then one per shield setting, in order.
+        The baseline first, then one per shield setting, in order; with ``from_onset``, last,
+        the first setting's from the onset (``driver``: its label and :data:`FROM_ONSET`).
     """
     shields = list(shields)
     if shields and monitor is None:
         raise ValueError("shield settings were given without a monitor")
+    if from_onset and not shields:
+        raise ValueError("from_onset needs a shield setting to switch on at the onset")
     if monitor is not None and monitor.camera is not perception.camera and \
             (monitor.camera.width, monitor.camera.height) != (perception.camera.width, perception.camera.height):
         raise ValueError("the monitor's camera and the perception's differ in image size")
@@ -417,11 +439,13 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
     max_range = monitor.config.max_range if monitor is not None else DEFAULT_RANGE_M
     shield_decel = (monitor.config.shield if monitor is not None else ShieldConfig()).deceleration
     world = build_world(spec, reaction=driver.reaction, brake=driver.brake, margin=driver.margin)
-    configs = [None] + shields
-    members = [_Member(Run(spec.kind, spec.condition, int(spec.seed), driver_label(c), world.regime,
-                           world.speed, hazard=_what(world)),
-                       Shield(c) if c is not None else None, driver, perception.camera.cam_to_ego[:2, 3])
-               for c in configs]
+    # (setting, switched on at the onset) per driver
+    configs = [(None, False)] + [(c, False) for c in shields] + ([(shields[0], True)] if from_onset else [])
+    members = [_Member(Run(spec.kind, spec.condition, int(spec.seed),
+                           driver_label(c) + (FROM_ONSET if late else ""), world.regime, world.speed,
+                           hazard=_what(world)),
+                       Shield(c) if c is not None else None, driver, perception.camera.cam_to_ego[:2, 3], late)
+               for c, late in configs]
     n_steps = int(math.ceil(world.max_time / driver.dt - 1e-9))
     # spawned once: SeedSequence.spawn counts its children, so a second spawn would differ
     streams = [seq.spawn(2) for seq in np.random.SeedSequence([int(spec.seed), 1]).spawn(n_steps)]
@@ -433,11 +457,6 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
         for world, group, earlier in branches:
             frame = perception.frame(world, condition, streams[step])
             depth, dets, hazard_row = frame.depth, frame.detections, frame.hazard_row
-            report = None
-            if any(m.shield is not None for m in group):
-                report = monitor.step(depth, dets.boxes3d, dets.scores)
-                before, earlier = shift_earlier(earlier, report, world.ego.speed * driver.dt)
-                emerged = monitor.emerged(report, before)
             hazard = world.hazard
             if onset is None and group[0].shield is None and hazard is not None and frame.visible > 0 \
                     and world.time >= hazard.onset - 1e-9 and frame.distance <= max_range:
@@ -447,6 +466,13 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 onset["seen_frames"] += bool(np.any((dets.source == hazard_row) & (dets.scores >= driver.min_score)))
                 if onset["entry"] is None and world.hazard_in_path():
                     onset["entry"] = _situation(world, driver, shield_decel)
+            report = None
+            if any(m.acting(onset) for m in group):
+                report = monitor.step(depth, dets.boxes3d, dets.scores)
+                before, earlier = shift_earlier(earlier, report, world.ego.speed * driver.dt)
+                emerged = monitor.emerged(report, before)
+            else:  # no report of this frame: a shield switched on later knows none of the frames before it
+                earlier = []
             trusted = dets.boxes3d[dets.scores >= driver.min_score]
             parts: dict[tuple, list] = {}
             for m in group:
@@ -465,7 +491,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                     m.braking = False
                 decel = driver.brake if m.braking else 0.0
                 engaged = False
-                if m.shield is not None:
+                if m.acting(onset):
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
                                                time=world.time, emerged=emerged)
                     if decision.engaged and not (m.run.history["engaged"] and m.run.history["engaged"][-1]):
@@ -480,7 +506,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 applied = m.queue.popleft()
                 h = m.run.history
                 for key, value in zip(HISTORY_KEYS, (world.time, world.ego.speed, world.hazard_gap(),
-                                                     report.risk if m.shield is not None else float("nan"),
+                                                     report.risk if m.acting(onset) else float("nan"),
                                                      engaged, max(-applied, 0.0))):
                     h[key].append(value)
                 m.run.frames += 1

@@ -11,10 +11,12 @@ baseline run of the same scenario:
   the onset to the collision: the monitor's case; a hazard the detector saw and the planner
   still hit is the planner's), and over the avoidable ones still avoidable when the hazard
   entered the ego's path (``Run.onset["entry"]``: those a shield can avoid without
-  foreseeing where the hazard goes); how many of the avoidable ones it avoided with the car
-  slower at the hazard's onset than the baseline's (the shield had braked before the hazard
-  was in view, for something else); the mean impact speed of the collisions left;
-  collisions only the shielded car had; rear-end collisions;
+  foreseeing where the hazard goes); the avoidance of the avoidable ones by the same shield
+  switched on at the hazard's onset (``from_onset`` of
+  :func:`~monitor.offline.closed_loop.run_scenario`: a shield that had braked before the
+  hazard was in view, for something else, met it slower, and may have avoided it for that
+  alone); the mean impact speed of the collisions left; collisions only the shielded car
+  had; rear-end collisions;
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
   at once or once confirmed, a remembered one, a frame without a view) and what the nearest
@@ -50,13 +52,18 @@ from collections import Counter, defaultdict
 import numpy as np
 from scipy.stats import norm, t as student_t
 
-from monitor.offline.closed_loop import BASELINE, Run
+from monitor.offline.closed_loop import BASELINE, FROM_ONSET, Run
 from monitor.offline.scenarios import HAZARD_KINDS
 from monitor.shield import CAUSES
 
 #: Share of the frames from a hazard's onset in which the baseline's detector must report it
 #: for the hazard to count as seen (``Run.onset["seen_frames"] / Run.onset["frames"]``).
 SEEN_SHARE = 0.5
+
+
+def _scenario(run: Run) -> tuple:
+    """The scenario a run drove: ``(kind, condition, seed)``."""
+    return run.kind, run.condition, run.seed
 
 
 def pair_runs(runs: list[Run], driver: str) -> list[tuple[Run, Run]]:
@@ -66,7 +73,7 @@ def pair_runs(runs: list[Run], driver: str) -> list[tuple[Run, Run]]:
     """
     by_scenario: dict[tuple, dict[str, Run]] = defaultdict(dict)
     for run in runs:
-        by_scenario[(run.kind, run.condition, run.seed)][run.driver] = run
+        by_scenario[_scenario(run)][run.driver] = run
     pairs = []
     for key, drivers in by_scenario.items():
         if BASELINE not in drivers or driver not in drivers:
@@ -106,8 +113,12 @@ def mean_interval(values, level: float = 0.95) -> tuple[float, float]:
     return float(values.mean()) - half, float(values.mean()) + half
 
 
-def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
-    """Collision and avoidance measures of (baseline, shielded) pairs of hazard scenarios."""
+def hazard_measures(pairs: list[tuple[Run, Run]], from_onset: dict | None = None) -> dict:
+    """Collision and avoidance measures of (baseline, shielded) pairs of hazard scenarios.
+
+    ``from_onset`` maps each scenario (``kind, condition, seed``) to the shield's drive
+    switched on at the hazard's onset; without it (None) the avoidance from the onset is NaN.
+    """
     n = len(pairs)
     base_hits = [(b, s) for b, s in pairs if b.collided]
     avoidable = [(b, s) for b, s in base_hits if b.onset is not None and b.onset["avoidable"]]
@@ -115,7 +126,9 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
     missed = [(b, s) for b, s in avoidable if b.onset["seen_frames"] < SEEN_SHARE * b.onset["frames"]]
     in_path = [(b, s) for b, s in avoidable if b.onset["entry"] is not None and b.onset["entry"]["avoidable"]]
     avoided = lambda group: sum(not s.collided for _, s in group)  # noqa: E731
-    slower = [(b, s) for b, s in avoidable if _speed_at(s, b.onset["time"]) < b.onset["speed"]]
+    late = float("nan")
+    if from_onset is not None:
+        late = sum(not from_onset[_scenario(b)].collided for b, _ in avoidable)
     return {
         "runs": n,
         "baseline_collisions": len(base_hits),
@@ -126,7 +139,9 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "avoidable_collisions": len(avoidable),
         "avoidance_rate_avoidable": _rate(avoided(avoidable), len(avoidable)),
         "avoidance_rate_avoidable_interval": wilson_interval(avoided(avoidable), len(avoidable)),
-        "avoided_slower_at_onset": avoided(slower),
+        "avoidance_rate_avoidable_from_onset": _rate(late, len(avoidable)),
+        "avoidance_rate_avoidable_from_onset_interval": (wilson_interval(late, len(avoidable))
+                                                        if from_onset is not None else (float("nan"),) * 2),
         "avoidable_missed_collisions": len(missed),
         "avoidance_rate_avoidable_missed": _rate(avoided(missed), len(missed)),
         "avoidance_rate_avoidable_missed_interval": wilson_interval(avoided(missed), len(missed)),
@@ -141,14 +156,6 @@ def hazard_measures(pairs: list[tuple[Run, Run]]) -> dict:
         "rear_ended_shielded": sum(s.outcome == "rear-ended" for _, s in pairs),
         "rear_ended_baseline": sum(b.outcome == "rear-ended" for b, _ in pairs),
     }
-
-
-def _speed_at(run: Run, time: float) -> float:
-    """The ego's speed in ``run``'s frame at ``time`` (s), m/s; its last frame's if the run
-    ended before."""
-    times = run.history["time"]
-    k = int(np.searchsorted(times, time - 1e-9))
-    return float(run.history["speed"][min(k, len(times) - 1)])
 
 
 def availability_measures(pairs: list[tuple[Run, Run]]) -> dict:
@@ -197,6 +204,10 @@ def guerin_measures(pairs: list[tuple[Run, Run]]) -> dict:
 def summarise(runs: list[Run], driver: str) -> dict:
     """Every measure for one shielded driver against the baseline.
 
+    ``runs`` may hold the driver's drives switched on at the hazard's onset too (label
+    ``driver`` + :data:`~monitor.offline.closed_loop.FROM_ONSET`), then one for every hazard
+    scenario (ValueError otherwise); without them the avoidance from the onset is NaN.
+
     Returns
     -------
     dict
@@ -209,19 +220,24 @@ def summarise(runs: list[Run], driver: str) -> dict:
     pairs = pair_runs(runs, driver)
     kinds = list(dict.fromkeys(b.kind for b, _ in pairs))
     conditions = list(dict.fromkeys(b.condition for b, _ in pairs))
+    hazards = [p for p in pairs if p[0].kind in HAZARD_KINDS]
+    late = {_scenario(r): r for r in runs if r.driver == driver + FROM_ONSET} or None
+    lacking = [] if late is None else [_scenario(b) for b, _ in hazards if _scenario(b) not in late]
+    if lacking:
+        raise ValueError(f"scenarios {lacking[:3]}{' ...' if len(lacking) > 3 else ''} have no drive of "
+                         f"{driver + FROM_ONSET!r}; expected one for every hazard scenario or none")
 
     def measures(group, kind):
-        return hazard_measures(group) if kind in HAZARD_KINDS else availability_measures(group)
+        return hazard_measures(group, late) if kind in HAZARD_KINDS else availability_measures(group)
 
     by_kind = {k: measures([p for p in pairs if p[0].kind == k], k) for k in kinds}
     by_kind_condition = {k: {c: measures(g, k) for c in conditions
                              if (g := [p for p in pairs if p[0].kind == k and p[0].condition == c])}
                          for k in kinds}
-    hazards = [p for p in pairs if p[0].kind in HAZARD_KINDS]
     drives = [p for p in pairs if p[0].kind not in HAZARD_KINDS]
     classes = list(dict.fromkeys(b.hazard["class"] for b, _ in hazards))
-    by_hazard = {c: hazard_measures([p for p in hazards if p[0].hazard["class"] == c]) for c in classes}
-    by_condition = {c: {"hazard": hazard_measures([p for p in hazards if p[0].condition == c]),
+    by_hazard = {c: hazard_measures([p for p in hazards if p[0].hazard["class"] == c], late) for c in classes}
+    by_condition = {c: {"hazard": hazard_measures([p for p in hazards if p[0].condition == c], late),
                         "guerin": guerin_measures([p for p in pairs if p[0].condition == c])}
                     for c in conditions}
     return {
@@ -230,7 +246,7 @@ def summarise(runs: list[Run], driver: str) -> dict:
         "by_kind_condition": by_kind_condition,
         "by_hazard": by_hazard,
         "by_condition": by_condition,
-        "overall": {"hazard": hazard_measures(hazards), "availability": availability_measures(drives),
+        "overall": {"hazard": hazard_measures(hazards, late), "availability": availability_measures(drives),
                     "guerin": guerin_measures(pairs)},
     }
 

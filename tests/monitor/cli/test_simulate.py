@@ -24,13 +24,16 @@ def test_simulate_smoke(tmp_path, capsys):
     for name in OUTPUTS + SWEEP_OUTPUTS:
         assert (out / name).stat().st_size > 0, name
     runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    shield = "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1"
+    # per scenario the baseline, the shield and the shield switched on at the hazard's onset
     assert [(r["condition"], r["seed"], r["driver"]) for r in runs] == [
-        ("nominal", 0, "baseline"), ("nominal", 0, "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1"),
-        ("snow", 1, "baseline"), ("snow", 1, "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1")]
+        (condition, seed, driver) for condition, seed in (("nominal", 0), ("snow", 1))
+        for driver in ("baseline", shield, shield + " from onset")]
     assert len(runs[0]["history"]["time"]) == runs[0]["frames"]
     sweep = [json.loads(line) for line in (out / "sweep.jsonl").read_text().splitlines()]
     assert len(sweep) == len(sweep_settings(ShieldConfig()))  # 6 thresholds x 4 hysteresis settings
     summary = (out / "summary.md").read_text()
+    assert "avoidable: avoided by the shield switched on at the onset" in summary
     assert "| cut-in | nominal | 1 |" in summary and "| cut-in | all | 2 |" in summary
     assert runs[0]["hazard"]["class"] == "car" and len(runs[0]["hazard"]["size"]) == 3
     assert "| car | 2 |" in summary  # the cut-in car, by what the hazard is

@@ -15,7 +15,7 @@ from monitor.config import load_config  # noqa: E402
 from monitor.depth.prior import build_prior  # noqa: E402
 from monitor.offline import safety_measures as sm  # noqa: E402
 from monitor.offline.closed_loop import (  # noqa: E402
-    BASELINE, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
+    BASELINE, FROM_ONSET, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
 )
 from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
 from monitor.risk_monitor import RiskMonitor  # noqa: E402
@@ -292,9 +292,41 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     # gated one brakes only while something stands in the path within reach (a quarter of
     # the frames here) and arrives
     drive = ScenarioSpec("hazard-free", "nominal", 0)
-    _, alone, path = run_scenario(drive, perception, monitor, [paper, gated], condition=BLIND)
+    base, alone, path, late = run_scenario(drive, perception, monitor, [paper, gated], condition=BLIND,
+                                           from_onset=True)
     assert alone.engaged_frames == alone.frames and alone.outcome == "timeout"
     assert path.outcome == "arrived" and 0 < path.engaged_frames < 0.5 * path.frames
+    # without a hazard there is no onset: the paper's shield switched on there never is
+    assert {**late.to_dict(), "driver": BASELINE} == base.to_dict()
+
+
+def test_a_shield_switched_on_at_the_onset_drives_as_the_baseline_before_it(perception, monitor, monkeypatch):
+    # a blind detector: the gated shield brakes for traffic it cannot see at 2.0 s, before the
+    # walker (seed 0) comes into view at 2.2 s
+    spec = ScenarioSpec("pedestrian", "nominal", 0)
+    asked = []  # per call, how many frames before it emerged was given
+    emerged = monitor.emerged
+    monkeypatch.setattr(monitor, "emerged", lambda report, before: asked.append(len(before)) or emerged(report, before))
+    base, shielded, late = run_scenario(spec, perception, monitor, [monitor.config.shield], condition=BLIND,
+                                        from_onset=True)
+    assert late.driver == shielded.driver + FROM_ONSET and late.onset == base.onset
+    k = base.history["time"].index(base.onset["time"])
+    assert shielded.engagements[0]["time"] < base.onset["time"] and any(shielded.history["engaged"][:k])
+    # before the onset: the baseline's drive, no risk, nothing engaged
+    for key in ("time", "speed", "gap", "decel"):
+        assert late.history[key][:k] == base.history[key][:k], key
+    assert not any(late.history["engaged"][:k]) and np.isnan(late.history["risk"][:k]).all()
+    # from the onset on its shield decides, afresh
+    assert not np.isnan(late.history["risk"][k:]).any()
+    assert late.engagements and late.engagements[0]["time"] >= base.onset["time"]
+    assert late.engaged_frames == sum(late.history["engaged"]) > 0
+    # the monitor ran where a shield decided: before the onset in one branch a frame (the one
+    # all shared, then the shield's once it braked); from the onset in two, the switched-on
+    # shield's knowing none of the frames before it
+    assert asked[:k] == [0, 1] + [2] * (k - 2)
+    assert sorted(asked[k:k + 2]) == [0, 2] and sorted(asked[k + 2:k + 4]) == [1, 2]
+    with pytest.raises(ValueError, match="from_onset needs a shield setting"):
+        run_scenario(spec, perception, monitor, [], from_onset=True)
 
 
 def test_seeds_reproduce_and_differ(perception, monitor):
@@ -317,9 +349,7 @@ def test_branches_equal_separate_runs(perception, monitor):
 
 
 def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"), frames=10, braking=0,
-         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ()),
-         speeds=(10.0, 10.0)):
-    # the hazard's onset at 1.0 s (the baseline at 10 m/s); ``speeds`` at 0.5 s and 1.0 s
+         engaged=0, impact=0.0, seen=0, in_path=True, what="debris", causes=(), first=((), ())):
     hazard = None if kind == "hazard-free" else {"class": what, "size": [0.6, 0.6, 0.3]}
     engagements = [{"cause": c, "objects": [], "on": []} for c in causes]
     if engagements:  # the first one's objects and what they lay on
@@ -327,7 +357,6 @@ def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"
     run = Run(kind, "nominal", seed, driver, "urban", 10.0, outcome=outcome, hazard=hazard, impact_speed=impact,
               trip_time=trip, frames=frames, braking_frames=braking, engaged_frames=engaged,
               engagements=engagements)
-    run.history.update(time=[0.5, 1.0], speed=list(speeds))
     run.onset = {"time": 1.0, "speed": 10.0, "avoidable": avoidable, "frames": 6, "seen_frames": seen,
                  "entry": {"avoidable": in_path}}
     return run
@@ -335,19 +364,20 @@ def _run(kind, seed, driver, outcome="stopped", avoidable=True, trip=float("nan"
 
 def test_measures_by_hand():
     shield = "t0.50 r0.50 h0"
+    late = shield + FROM_ONSET
     runs = [
         # 4 hazard scenarios: baseline hits 3 (2 avoidable), the shield avoids 2 and hits 1 at 4 m/s
-        # seeds 0 and 2 are animals, 1 and 3 debris
-        # (seed 0 avoided, the car at 8 m/s at the animal's onset: the shield had braked before)
+        # seeds 0 and 2 are animals, 1 and 3 debris. Switched on at the onset, the shield hits
+        # seed 0's animal (it avoided it for having braked before) and stops for seed 1's debris
         _run("rare-object", 0, BASELINE, "collision", impact=10.0, what="animal"),
-        _run("rare-object", 0, shield, what="animal", speeds=(9.0, 8.0)),
+        _run("rare-object", 0, shield, what="animal"), _run("rare-object", 0, late, "collision", what="animal"),
         # seed 1's hazard the detector reported in 3 of the 6 frames from its onset: seen; it
         # could no longer be avoided once it entered the path
         _run("rare-object", 1, BASELINE, "collision", impact=8.0, seen=3, in_path=False),
-        _run("rare-object", 1, shield, "collision", impact=4.0, speeds=(9.0, 9.5)),
+        _run("rare-object", 1, shield, "collision", impact=4.0), _run("rare-object", 1, late),
         _run("rare-object", 2, BASELINE, "collision", avoidable=False, impact=9.0, what="animal"),
-        _run("rare-object", 2, shield, what="animal"),
-        _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield),
+        _run("rare-object", 2, shield, what="animal"), _run("rare-object", 2, late, what="animal"),
+        _run("rare-object", 3, BASELINE), _run("rare-object", 3, shield), _run("rare-object", 3, late),
         # 3 drives: the shield brakes in two (trip 12 s instead of 10 s: +20 %; and +0 %), the
         # first engaged at once (by two objects: on a car 8 m ahead, on the road 6 m ahead), then
         # once confirmed, the second first in a frame without a view (no object)
@@ -365,12 +395,12 @@ def test_measures_by_hand():
     assert (h["baseline_collisions"], h["shielded_collisions"]) == (3, 1)
     assert h["avoidance_rate"] == pytest.approx(2 / 3)
     assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)  # seeds 0 and 1, seed 0 avoided
-    # seed 0 met its onset slower than the baseline; seed 1 too, but was not avoided
-    assert h["avoided_slower_at_onset"] == 1
-    # a drive that ended (stopped) before the onset's time is at its last speed then
-    assert sm._speed_at(_run("rare-object", 9, shield, speeds=(4.0, 0.0)), 5.0) == 0.0
+    # switched on at the onset: seed 1 of the two avoidable ones avoided
+    assert h["avoidance_rate_avoidable_from_onset"] == pytest.approx(1 / 2)
+    assert h["avoidance_rate_avoidable_from_onset_interval"] == sm.wilson_interval(1, 2)
     table = markdown({**s, "command": "fuzzrisk simulate"}, [], shield, 7, 1.0, 1, None)
-    assert re.search(r"\| rare-object \| all \| 4 \| 75% \| 25% \| 67% \| 50% of 2 \[\d+%, \d+%\] \| 1 \| ", table)
+    assert re.search(r"\| rare-object \| all \| 4 \| 75% \| 25% \| 67% \| 50% of 2 \[\d+%, \d+%\] \| "
+                     r"50% \[\d+%, \d+%\] \| ", table)
     assert (h["avoidable_missed_collisions"], h["avoidance_rate_avoidable_missed"]) == (1, 1.0)  # seed 0
     assert (h["avoidable_in_path_collisions"], h["avoidance_rate_avoidable_in_path"]) == (1, 1.0)  # seed 0
     assert h["avoidance_rate_avoidable_in_path_interval"] == sm.wilson_interval(1, 1)
@@ -381,6 +411,7 @@ def test_measures_by_hand():
     assert (animal["runs"], animal["baseline_collisions"], animal["unavoidable_collisions"]) == (2, 2, 1)
     assert (animal["avoidable_collisions"], animal["avoidance_rate_avoidable"]) == (1, 1.0)
     assert (debris["runs"], debris["avoidable_collisions"], debris["avoidance_rate_avoidable"]) == (2, 1, 0.0)
+    assert (animal["avoidance_rate_avoidable_from_onset"], debris["avoidance_rate_avoidable_from_onset"]) == (0.0, 1.0)
     a = s["by_kind"]["hazard-free"]
     assert a["false_brake_rate"] == pytest.approx(2 / 3) and a["added_trip_time"] == pytest.approx(0.2 / 3)
     assert a["braking_share"] == pytest.approx(5 / 30)
@@ -399,6 +430,14 @@ def test_measures_by_hand():
     assert (lo, hi) == pytest.approx((0.2 / 3 - half, 0.2 / 3 + half), abs=1e-4)
     with pytest.raises(ValueError, match="expected 'baseline'"):
         sm.pair_runs(runs[1:], shield)
+    # without the drives from the onset the measure is not known; with some, every hazard needs one
+    h = sm.summarise([r for r in runs if r.driver != late], shield)["overall"]["hazard"]
+    assert math.isnan(h["avoidance_rate_avoidable_from_onset"])
+    assert np.isnan(h["avoidance_rate_avoidable_from_onset_interval"]).all()
+    assert h["avoidance_rate_avoidable"] == pytest.approx(1 / 2)
+    with pytest.raises(ValueError, match=r"\('rare-object', 'nominal', 1\)\] have no drive of "
+                                         r"'t0.50 r0.50 h0 from onset'"):
+        sm.summarise([r for r in runs if not (r.driver == late and r.seed == 1)], shield)
 
 
 @pytest.mark.parametrize("k, n, lo, hi", [  # Newcombe (1998), Table I, method 3 (Wilson's score)
