@@ -210,7 +210,8 @@ class Run:
     kind, condition : str
     seed : int
     driver : str
-        ``"baseline"`` or the shield's settings, ``"t0.50 r0.50 h0"``.
+        ``"baseline"`` or the shield's settings, ``"t0.50 r0.50 h0"``, followed by
+        :data:`FROM_ONSET` for its drive switched on at the hazard's onset.
     regime : str
         ``parking`` or ``urban``.
     cruise : float
