@@ -231,6 +231,11 @@ class ShieldConfig:
         row); what stands nearer reaches into the image's bottom rows, where the depth view
         cannot see the road beneath it, and a standing obstacle there was in view in the
         frame before. None: no such zone.
+    confirm_edge : float >= 0 or None
+        With a path gate that confirms: metres; an unseen object whose span reaches less than
+        this into the path (the part of ``y_min, y_max`` within ``path_half_width`` of the
+        centreline) counts only once confirmed, whatever its width. Such an edge lies in the
+        margin the path adds to the car's half width, beside the car's body. None: not asked.
     confirm_emerged : float in [0, 1] or None
         With a path gate that confirms: an unseen object of which at least this share of
         the blocks stood where each of the last two frames saw through to the road beyond
@@ -262,6 +267,7 @@ class ShieldConfig:
     confirm_width: float | None = 0.3
     emergency: float | None = 6.0
     confirm_near: float | None = 2.5
+    confirm_edge: float | None = 0.3
     confirm_emerged: float | None = None
     memory: float | None = 1.0
 
@@ -289,7 +295,8 @@ class ShieldConfig:
                                  "(or null: no path gate)")
             _set(self, "path_half_width", width)
         for name, null in (("confirm_width", "every unseen object is confirmed"),
-                           ("confirm_near", "no zone near the bumper")):
+                           ("confirm_near", "no zone near the bumper"),
+                           ("confirm_edge", "no edge is asked")):
             if getattr(self, name) is not None:
                 value = _number(getattr(self, name), name)
                 if not (math.isfinite(value) and value >= 0):

@@ -51,6 +51,14 @@ was in view a frame before, and one stepping in from the side was seen beside th
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
 car anyway.
 
+An object that reaches only a little into the path (``confirm_edge``) must be confirmed
+too, whatever its width. The path's half width adds a margin to the car's for the errors of
+where things stand, and an object reaching into that margin alone stands beside the car's
+body: most often the side of a car or truck beside the path that the view reads a little
+too far in, in a frame that groups it differently from the frames before (a patch of road
+at the path's edge, too). Something that comes into the path from the side was seen beside
+it in the frame before, where it stood, and is confirmed at once.
+
 With ``confirm_emerged`` an object that came out of the road must be confirmed too,
 wherever it stands: one of which that share of the blocks stood where each of the last two
 frames saw through to the road beyond (``emerged``, :meth:`monitor.RiskMonitor.emerged`,
@@ -138,6 +146,7 @@ def describe_shield(config: ShieldConfig) -> str:
         if config.confirm_width is not None:
             zones = ([] if config.emergency is None else ["beyond the emergency reach"]) + \
                 ([] if config.confirm_near is None else [f"within {config.confirm_near:g} m of the bumper"]) + \
+                ([] if config.confirm_edge is None else [f"reaching under {config.confirm_edge:g} m into the path"]) + \
                 ([] if config.confirm_emerged is None else [f"{100 * config.confirm_emerged:g} % out of the road"])
             if zones:
                 listed = zones[0] if len(zones) == 1 else f"{', '.join(zones[:-1])} and {zones[-1]}"
@@ -257,9 +266,10 @@ class Shield:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
-        ``confirm_width``, with ``emergency`` one beyond the emergency reach, and one within
-        ``confirm_near`` of the bumper, and one whose ``emerged`` share reaches
-        ``confirm_emerged``, count only once confirmed. Second, with a memory,
+        ``confirm_width``, with ``emergency`` one beyond the emergency reach, one within
+        ``confirm_near`` of the bumper, one reaching less than ``confirm_edge`` into the
+        path, and one whose ``emerged`` share reaches ``confirm_emerged``, count only once
+        confirmed. Second, with a memory,
         the deceleration the remembered objects call for where they stand now (0.0
         without); the counting objects of a frame that ``triggers`` (its risk above the
         threshold) are remembered. Third and fourth, why the first would engage the shield
@@ -316,6 +326,8 @@ class Shield:
                     asked |= ~urgent
                 if c.confirm_near is not None:
                     asked |= near[:, 0] - c.front < c.confirm_near
+                if c.confirm_edge is not None:
+                    asked |= np.minimum(near[:, 2], w) - np.maximum(near[:, 1], -w) < c.confirm_edge
                 if c.confirm_emerged is not None:
                     asked |= emerged[inside] >= c.confirm_emerged  # NaN: not known, not asked
             unconfirmed = asked.copy()

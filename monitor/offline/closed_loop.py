@@ -298,8 +298,9 @@ def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
-    `` n{confirm_near}`` when every object near the bumper is, `` o{confirm_emerged}`` when
-    every object out of the road is), `` e{emergency}`` for
+    `` n{confirm_near}`` when every object near the bumper is, `` g{confirm_edge}`` when every
+    edge of the path is, `` o{confirm_emerged}`` when every object out of the road is),
+    `` e{emergency}`` for
     a gate with an emergency stage and `` m{memory}`` for one that remembers."""
     if config is None:
         return BASELINE
@@ -310,6 +311,8 @@ def driver_label(config: ShieldConfig | None) -> str:
             gate += f"<{config.confirm_width:.2f}"
             if config.confirm_near is not None:
                 gate += f" n{config.confirm_near:g}"
+            if config.confirm_edge is not None:
+                gate += f" g{config.confirm_edge:g}"
             if config.confirm_emerged is not None:
                 gate += f" o{config.confirm_emerged:g}"
     if config.path_half_width is not None and config.emergency is not None:

@@ -146,8 +146,8 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3, emergency=None, confirm_near=None,
-                         memory=None)  # one stage, no near zone, no memory
+                         confirm_width=0.3, emergency=None, confirm_near=None, confirm_edge=None,
+                         memory=None)  # one stage, no near zone, no edge asked, no memory
 
 
 def _run(config, frames, speed=10.0, dt=0.1):
@@ -216,16 +216,17 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
-        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
-         "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
-         "remembered 1 s")
+        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
+         "within 2.5 m of the bumper and reaching under 0.3 m into the path: all) confirmed in 2 of 3 frames, "
+         "emergency 6 m/s^2, objects remembered 1 s")
     assert describe_shield(ShieldConfig(confirm_emerged=0.5)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
-        "within 2.5 m of the bumper and 50 % out of the road: all) confirmed in 2 of 3 frames")
-    assert describe_shield(ShieldConfig(emergency=None, memory=None)) == \
+        "within 2.5 m of the bumper, reaching under 0.3 m into the path and 50 % out of the road: all) "
+        "confirmed in 2 of 3 frames")
+    assert describe_shield(ShieldConfig(emergency=None, confirm_edge=None, memory=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
-    one = ShieldConfig(emergency=None, confirm_near=None, memory=None)
+    one = ShieldConfig(emergency=None, confirm_near=None, confirm_edge=None, memory=None)
     assert describe_shield(one) == \
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
@@ -300,6 +301,31 @@ def test_near_the_bumper_every_object_is_confirmed_first():
         ShieldConfig(confirm_near=-1.0)
     with pytest.raises(ValueError, match="confirm_near = 'close', must be a number"):
         ShieldConfig(confirm_near="close")
+
+
+def test_an_edge_of_the_path_is_confirmed_first():
+    edges = replace(STAGED, confirm_edge=0.3)
+    none = np.zeros((0, 3))
+    # at 10 m/s the emergency reach ends 15.33 m ahead of the bumper. A car beside the path,
+    # 10 m ahead, its inner side 1.0 m from the centreline, reaches 1.25 - 1.0 = 0.25 m into
+    # the path: only once it stood there in 2 of 3 frames (1 m nearer a frame later), then at
+    # 6 m/s^2; on the left side alike
+    right = [np.array([[3.8 + d, 1.0, 3.0]]) for d in (10.0, 9.0)]
+    left = [np.array([[3.8 + d, -3.0, -1.0]]) for d in (10.0, 9.0)]
+    assert _decisions(edges, right + [none], speed=10.0) == [0.0, 6.0, 6.0]
+    assert _decisions(edges, left, speed=10.0) == [0.0, 6.0]
+    # reaching 0.35 m in, or wholly inside (0.4 m wide), or across the whole path: at once
+    for span in ((0.9, 3.0), (-0.2, 0.2), (-2.0, 2.0)):
+        assert _decisions(edges, [np.array([[3.8 + 10.0, *span]])], speed=10.0) == [6.0], span
+    # an edge in a new place each frame (the right side, then the left, more than 0.3 + 2 * 0.1 m
+    # apart across the path): never
+    assert _decisions(edges, [right[0], left[1]], speed=10.0) == [0.0, 0.0]
+    # not asked without the setting
+    assert _decisions(STAGED, right[:1], speed=10.0) == [6.0]
+    with pytest.raises(ValueError, match=r"confirm_edge = -0.1, must be >= 0 metres \(or null: no edge"):
+        ShieldConfig(confirm_edge=-0.1)
+    with pytest.raises(ValueError, match="confirm_edge = 'thin', must be a number"):
+        ShieldConfig(confirm_edge="thin")
 
 
 def test_what_came_out_of_the_road_is_confirmed_first():

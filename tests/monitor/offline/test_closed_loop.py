@@ -269,7 +269,7 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
-    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 e6 m1")
+    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 g0.3 e6 m1")
     # each engagement says why: the first for an unseen object in the path, where the
     # obstacle stood then (the frame's hazard gap is measured from the ego's front, x from
     # its origin 3.8 m behind); the baseline has none
