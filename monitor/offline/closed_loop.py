@@ -300,8 +300,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
     `` n{confirm_near}`` when every object near the bumper is, `` g{confirm_edge}`` when every
     edge of the path is, `` o{confirm_emerged}`` when every object out of the road is),
-    `` e{emergency}`` for
-    a gate with an emergency stage and `` m{memory}`` for one that remembers."""
+    `` e{emergency}`` for a gate with an emergency stage and `` m{memory}`` for one that
+    remembers."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
