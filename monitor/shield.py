@@ -56,8 +56,9 @@ too, whatever its width. The path's half width adds a margin to the car's for th
 where things stand, and an object reaching into that margin alone stands beside the car's
 body: most often the side of a car or truck beside the path that the view reads a little
 too far in, in a frame that groups it differently from the frames before (a patch of road
-at the path's edge, too). Something that comes into the path from the side was seen beside
-it in the frame before, where it stood, and is confirmed at once.
+at the path's edge, too). Something that comes into the path from the side and that one of
+the two frames before showed beside it, no detection covering it, is confirmed at once (one a
+detection covered there waits a frame).
 
 With ``confirm_emerged`` an object that came out of the road must be confirmed too,
 wherever it stands: one of which that share of the blocks stood where each of the last two
