@@ -267,7 +267,7 @@ class ShieldConfig:
     confirm_width: float | None = 0.3
     emergency: float | None = 6.0
     confirm_near: float | None = 2.5
-    confirm_edge: float | None = 0.3
+    confirm_edge: float | None = None
     confirm_emerged: float | None = None
     memory: float | None = 1.0
 

@@ -51,14 +51,15 @@ was in view a frame before, and one stepping in from the side was seen beside th
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
 car anyway.
 
-An object that reaches only a little into the path (``confirm_edge``) must be confirmed
+With ``confirm_edge`` an object that reaches only a little into the path must be confirmed
 too, whatever its width. The path's half width adds a margin to the car's for the errors of
 where things stand, and an object reaching into that margin alone stands beside the car's
 body: most often the side of a car or truck beside the path that the view reads a little
 too far in, in a frame that groups it differently from the frames before (a patch of road
 at the path's edge, too). Something that comes into the path from the side and that one of
 the two frames before showed beside it, no detection covering it, is confirmed at once (one a
-detection covered there waits a frame).
+detection covered there waits a frame). A walker stepping into the path reaches its edge
+first, so the option is off by default (docs/closed-loop.md).
 
 With ``confirm_emerged`` an object that came out of the road must be confirmed too,
 wherever it stands: one of which that share of the blocks stood where each of the last two

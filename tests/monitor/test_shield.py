@@ -146,8 +146,8 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3, emergency=None, confirm_near=None, confirm_edge=None,
-                         memory=None)  # one stage, no near zone, no edge asked, no memory
+                         confirm_width=0.3, emergency=None, confirm_near=None,
+                         memory=None)  # one stage, no near zone, no memory
 
 
 def _run(config, frames, speed=10.0, dt=0.1):
@@ -216,17 +216,17 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
-        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
-         "within 2.5 m of the bumper and reaching under 0.3 m into the path: all) confirmed in 2 of 3 frames, "
-         "emergency 6 m/s^2, objects remembered 1 s")
-    assert describe_shield(ShieldConfig(confirm_emerged=0.5)).startswith(
+        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
+         "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
+         "remembered 1 s")
+    assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
         "within 2.5 m of the bumper, reaching under 0.3 m into the path and 50 % out of the road: all) "
         "confirmed in 2 of 3 frames")
-    assert describe_shield(ShieldConfig(emergency=None, confirm_edge=None, memory=None)) == \
+    assert describe_shield(ShieldConfig(emergency=None, memory=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
-    one = ShieldConfig(emergency=None, confirm_near=None, confirm_edge=None, memory=None)
+    one = ShieldConfig(emergency=None, confirm_near=None, memory=None)
     assert describe_shield(one) == \
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \

@@ -11,11 +11,12 @@ pytest.importorskip("highway_env", reason="the closed loop needs the 'sim' extra
 
 import fuzzcore  # noqa: E402
 from monitor.cli.simulate import markdown  # noqa: E402
-from monitor.config import load_config  # noqa: E402
+from monitor.config import ShieldConfig, load_config  # noqa: E402
 from monitor.depth.prior import build_prior  # noqa: E402
 from monitor.offline import safety_measures as sm  # noqa: E402
 from monitor.offline.closed_loop import (  # noqa: E402
-    BASELINE, FROM_ONSET, Driver, Perception, Run, in_reach, required_gap, run_scenario, stopping_distance,
+    BASELINE, FROM_ONSET, Driver, Perception, Run, driver_label, in_reach, required_gap, run_scenario,
+    stopping_distance,
 )
 from monitor.offline.scenarios import ScenarioSpec, advance, build_world  # noqa: E402
 from monitor.risk_monitor import RiskMonitor  # noqa: E402
@@ -70,6 +71,15 @@ def test_stopping_distance_by_hand():
     assert required_gap(10.0, 5.0, 0.2, 10.0, 10.0) == pytest.approx(7.0, abs=1e-3)
     # a hazard as fast as the ego, never braking: the ego never gains on it
     assert required_gap(10.0, 5.0, 0.2, 10.0, 0.0) == 0.0
+
+
+def test_driver_label_names_each_setting():
+    assert driver_label(None) == BASELINE
+    assert driver_label(ShieldConfig()) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 e6 m1"
+    assert driver_label(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.8)) == \
+        "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 g0.3 o0.8 e6 m1"
+    assert driver_label(ShieldConfig(threshold=0.5, release=0.4, hold_frames=0, path_half_width=None)) == \
+        "t0.50 r0.40 h0"
 
 
 def test_advance_integrates_exactly():
@@ -269,7 +279,7 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
-    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 g0.3 e6 m1")
+    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 e6 m1")
     # each engagement says why: the first for an unseen object in the path, where the
     # obstacle stood then (the frame's hazard gap is measured from the ego's front, x from
     # its origin 3.8 m behind); the baseline has none
