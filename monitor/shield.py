@@ -271,12 +271,11 @@ class Shield:
         ``confirm_width``, with ``emergency`` one beyond the emergency reach, one within
         ``confirm_near`` of the bumper, one reaching less than ``confirm_edge`` into the
         path, and one whose ``emerged`` share reaches ``confirm_emerged``, count only once
-        confirmed. Second, with a memory,
-        the deceleration the remembered objects call for where they stand now (0.0
-        without); the counting objects of a frame that ``triggers`` (its risk above the
-        threshold) are remembered. Third and fourth, why the first would engage the shield
-        (``no view``, ``at once``, ``confirmed``; "" for nothing) and the objects that count,
-        as :class:`ShieldDecision` gives them."""
+        confirmed. Second, with a memory, the deceleration the remembered objects call for
+        where they stand now (0.0 without); the counting objects of a frame that
+        ``triggers`` (its risk above the threshold) are remembered. Third and fourth, why
+        the first would engage the shield (``no view``, ``at once``, ``confirmed``; "" for
+        nothing) and the objects that count, as :class:`ShieldDecision` gives them."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
