@@ -26,7 +26,7 @@ from monitor.depth.prior import load_prior
 from monitor.geometry.camera import Camera
 from monitor.offline.run import RunSpec, ScenePlan
 from monitor.shipped import shipped_rules
-from monitor.synthetic import CONDITIONS
+from monitor.synthetic import CONDITIONS, DEPTH_ERROR_PARTS
 from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
 
 
@@ -60,6 +60,27 @@ class Selection:
     note: str
 
 
+def add_depth_ablation_argument(group) -> None:
+    """``--no-depth-error PART ...`` (synthetic scenes): parts of the depth network's error off."""
+    group.add_argument("--no-depth-error", nargs="+", default=[], metavar="PART",
+                       choices=list(DEPTH_ERROR_PARTS) + ["all"],
+                       help="synthetic scenes: an ablation, these parts of the depth network's error switched off "
+                            f"({', '.join(DEPTH_ERROR_PARTS)}; all: the true depth), the detector's as they were")
+
+
+def depth_ablation(args: argparse.Namespace) -> tuple[str, ...]:
+    """The parts ``--no-depth-error`` switches off, in :data:`DEPTH_ERROR_PARTS` order (``all``: every one)."""
+    return tuple(p for p in DEPTH_ERROR_PARTS if p in args.no_depth_error or "all" in args.no_depth_error)
+
+
+def ablation_note(parts: tuple[str, ...]) -> str:
+    """The sentence a report on an ablation carries ("" for none)."""
+    if not parts:
+        return ""
+    return (f"An ablation: the depth network's {', '.join(parts)} switched off "
+            "(`monitor.synthetic.without_depth_errors`); the scenes and the detector's errors are the conditions'.")
+
+
 def add_scene_arguments(parser: argparse.ArgumentParser, *, default_scenes: int, default_test: int) -> None:
     group = parser.add_argument_group("scenes (default: the built-in synthetic benchmark)")
     group.add_argument("--scenes", type=int, default=default_scenes, help="synthetic scenes per condition "
@@ -72,6 +93,7 @@ def add_scene_arguments(parser: argparse.ArgumentParser, *, default_scenes: int,
     group.add_argument("--conditions", nargs="+", default=list(CONDITIONS), choices=list(CONDITIONS),
                        metavar="CONDITION", help="synthetic conditions (default: all six)")
     group.add_argument("--seed", type=int, default=0, help="synthetic benchmark seed (default %(default)s)")
+    add_depth_ablation_argument(group)
     group.add_argument("--scene-dir", nargs="+", default=None, metavar="DIR",
                        help="scene folders on disk instead (monitor.datasets.scene_folder format); needs --prior")
     group.add_argument("--recording", nargs="+", default=None, metavar="DIR",
@@ -147,6 +169,8 @@ def select_scenes(args: argparse.Namespace, split: str | None, progress=None) ->
         raise ValueError(f"{' and '.join(given)} are alternatives; give one")
     if args.depth_model is not None and given not in (["--nuscenes"], ["--recording"]):
         raise ValueError("--depth-model estimates depth from the camera images of --nuscenes or --recording")
+    if args.no_depth_error and given:
+        raise ValueError(f"--no-depth-error switches off errors of the synthetic depth network, not of {given[0]}")
     if args.nuscenes is not None:
         return _select_nuscenes(args)
     if args.scene_dir or args.recording:
@@ -167,10 +191,10 @@ def select_scenes(args: argparse.Namespace, split: str | None, progress=None) ->
         return Selection(load_prior(args.prior), camera, plans, note)
     bench = Benchmark(conditions=tuple(args.conditions), scenes_per_condition=args.scenes,
                       test_scenes=args.test_scenes, n_frames=args.frames, prior_scenes=args.prior_scenes,
-                      seed=args.seed)
+                      seed=args.seed, depth_off=depth_ablation(args))
     note = (f"{SYNTHETIC_NOTE} Benchmark: {args.scenes} scenes per condition ({args.test_scenes} held out "
             f"for testing), {args.frames} frames each at 2 Hz, seed {args.seed}; prior from "
-            f"{args.prior_scenes} separate nominal scenes.")
+            f"{args.prior_scenes} separate nominal scenes. {ablation_note(bench.depth_off)}").rstrip()
     plans = [ScenePlan.of_source(s, s.n_frames) for s in bench.scenes(split)]
     return Selection(bench.prior(progress), bench.camera, plans, note)
 

@@ -11,6 +11,11 @@ with a grid of shield settings as well. Writes, in ``--out``:
 - ``summary.md`` and ``summary.json``: the measures of :mod:`monitor.offline.safety_measures`;
 - ``traces.png``, ``conditions.png`` and, with ``--sweep``, ``sweep.jsonl`` and ``trade_off.png``.
 
+``--no-depth-error PART ...`` drives with parts of the depth network's error switched off
+(:func:`~monitor.synthetic.without_depth_errors`; ``all``: the true depth), the detector as
+the condition degrades it: an ablation that tells what the shield's braking owes to the
+depth estimate and what to the monitor's own logic. The summary says so.
+
 Needs highway-env (``pip install fuzzrisk[sim]``). ``--workers N`` drives scenarios in N
 processes; the results are the same, in the same order, as with one.
 """
@@ -35,6 +40,7 @@ SWEEP_OUTPUTS = ("sweep.jsonl", "trade_off.png")
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from monitor.cli.scenes import add_depth_ablation_argument
     from monitor.offline.scenarios import KINDS
     from monitor.synthetic import CONDITIONS
 
@@ -51,6 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sweep", type=int, default=0,
                         help="also drive the first SWEEP scenarios of each kind with every shield setting of "
                              "the threshold/hysteresis grid (default 0: no sweep)")
+    add_depth_ablation_argument(parser)
     parser.add_argument("--workers", type=int, default=1, help="processes (default %(default)s)")
 
 
@@ -87,7 +94,7 @@ def sweep_settings(default):
 _STATE: dict = {}
 
 
-def _init(rules, config_path, prior, camera) -> None:
+def _init(rules, config_path, prior, camera, depth_off) -> None:
     import fuzzcore
     from monitor.config import load_config
     from monitor.offline.closed_loop import Perception
@@ -96,6 +103,7 @@ def _init(rules, config_path, prior, camera) -> None:
     config = load_config(config_path)
     _STATE["monitor"] = RiskMonitor(fuzzcore.load(rules), prior, camera, config, explain=False)
     _STATE["perception"] = Perception(camera)
+    _STATE["depth_off"] = tuple(depth_off)
 
 
 def _drive(job):
@@ -103,17 +111,22 @@ def _drive(job):
     the first shield's switched on at the hazard's onset."""
     from monitor.offline.closed_loop import run_scenario
     from monitor.offline.scenarios import HAZARD_KINDS
+    from monitor.synthetic import get_condition, without_depth_errors
 
     spec, shields = job
-    return run_scenario(spec, _STATE["perception"], _STATE["monitor"], shields,
+    off = _STATE["depth_off"]
+    condition = without_depth_errors(get_condition(spec.condition), off) if off else None
+    return run_scenario(spec, _STATE["perception"], _STATE["monitor"], shields, condition=condition,
                         from_onset=spec.kind in HAZARD_KINDS)
 
 
-def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=None) -> list:
-    """Run ``(spec, shields)`` jobs, in ``workers`` processes; results in the order of ``jobs``."""
+def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=None, depth_off=()) -> list:
+    """Run ``(spec, shields)`` jobs, in ``workers`` processes; results in the order of ``jobs``.
+    ``depth_off``: parts of the depth network's error switched off in every job
+    (:func:`~monitor.synthetic.without_depth_errors`)."""
     results = []
     if workers == 1:
-        _init(rules, config_path, prior, camera)
+        _init(rules, config_path, prior, camera, depth_off)
         for job in jobs:
             results.append(_drive(job))
             if progress is not None:
@@ -122,7 +135,7 @@ def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=No
     import multiprocessing
 
     ctx = multiprocessing.get_context("spawn")  # no forked OpenCV/Numba threads
-    with ctx.Pool(workers, initializer=_init, initargs=(rules, config_path, prior, camera)) as pool:
+    with ctx.Pool(workers, initializer=_init, initargs=(rules, config_path, prior, camera, depth_off)) as pool:
         for result in pool.imap(_drive, jobs, chunksize=1):
             results.append(result)
             if progress is not None:
@@ -144,13 +157,15 @@ def run(args: argparse.Namespace) -> int:
     from monitor.offline.closed_loop import BASELINE, FROM_ONSET, driver_label
     from monitor.report.closed_loop_figures import condition_figure, trade_off_figure, traces_figure
     from monitor.shipped import shipped_rules
+    from monitor.cli.scenes import depth_ablation
     from monitor.synthetic.suite import SYNTHETIC_NOTE, Benchmark
 
     config = load_config(args.config)  # errors before the work starts
     rules = args.rules or str(shipped_rules())
     if not Path(rules).is_file():
         raise FileNotFoundError(f"--rules {rules}: no such file")
-    bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=0)
+    depth_off = depth_ablation(args)
+    bench = Benchmark(conditions=("nominal",), prior_scenes=2, seed=0, depth_off=depth_off)
     prior = bench.prior()
     specs = _jobs(args.kind, args.condition, args.scenarios, args.seed)
     sweep = sweep_settings(config.shield) if args.sweep else []
@@ -160,7 +175,7 @@ def run(args: argparse.Namespace) -> int:
             for spec in specs]
     start = time.perf_counter()
     bar = tqdm(total=len(jobs), unit="scenario", desc="simulate", disable=None)
-    results = drive_all(jobs, rules, args.config, prior, bench.camera, args.workers, bar.update)
+    results = drive_all(jobs, rules, args.config, prior, bench.camera, args.workers, bar.update, depth_off)
     bar.close()
     seconds = time.perf_counter() - start
 
@@ -169,9 +184,11 @@ def run(args: argparse.Namespace) -> int:
     all_runs = [run for runs in results for run in runs if run.driver != default + FROM_ONSET]
     summary = sm.summarise(main_runs, default)
     summary["seconds"] = seconds
+    summary["depth_errors_off"] = list(depth_off)
+    ablation = f"--no-depth-error {' '.join(depth_off)} " if depth_off else ""
     summary["command"] = (f"fuzzrisk simulate --scenarios {args.scenarios} --seed {args.seed} --kind "
                           f"{' '.join(args.kind)} --condition {' '.join(args.condition)} --sweep {args.sweep} "
-                          f"--workers {args.workers}")
+                          f"{ablation}--workers {args.workers}")
     paths = dict(zip(OUTPUTS + (SWEEP_OUTPUTS if args.sweep else ()), targets))
     write_text(paths["runs.jsonl"], "".join(json.dumps(r.to_dict()) + "\n" for r in main_runs))
     write_text(paths["summary.json"], json.dumps(_clean(summary), indent=1) + "\n")
@@ -221,11 +238,15 @@ def _num(value, fmt="{:.1f}") -> str:
 def markdown(summary: dict, points: list, default: str, n_scenarios: int, seconds: float, workers: int,
              note: str | None) -> str:
     """The summary as Markdown tables."""
+    from monitor.cli.scenes import ablation_note
+
     lines = []
     if note:
         lines += ["# Closed-loop simulation", "", note, ""]
-    lines += [f"`{summary['command']}`", "",
-              f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s). "
+    lines += [f"`{summary['command']}`", ""]
+    if summary.get("depth_errors_off"):
+        lines += [ablation_note(tuple(summary["depth_errors_off"])), ""]
+    lines += [f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s). "
               "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time).", "",
               "## Hazards (baseline collisions avoided by the shield)", "",
               "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "

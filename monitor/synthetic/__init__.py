@@ -18,13 +18,14 @@ models), :mod:`~monitor.synthetic.conditions` (the degradation tables),
 (a picture to draw boxes on).
 """
 from monitor.synthetic.conditions import (
-    CONDITIONS, Condition, DepthErrors, DetectorErrors, get_condition,
+    CONDITIONS, DEPTH_ERROR_PARTS, Condition, DepthErrors, DetectorErrors, get_condition, without_depth_errors,
 )
 from monitor.synthetic.generate import generate_frames, generate_scene, warm_up
 from monitor.synthetic.raycast import DepthRender, render_depth
 from monitor.synthetic.shade import shade
 
 __all__ = [
-    "CONDITIONS", "Condition", "DepthErrors", "DetectorErrors", "get_condition",
+    "CONDITIONS", "DEPTH_ERROR_PARTS", "Condition", "DepthErrors", "DetectorErrors", "get_condition",
+    "without_depth_errors",
     "generate_frames", "generate_scene", "warm_up", "DepthRender", "render_depth", "shade",
 ]

@@ -141,6 +141,18 @@ class DepthErrors:
         _check_interval(self, "artifact_factor", 0.01, 1.0)
 
 
+#: The parts of :class:`DepthErrors` that :func:`without_depth_errors` switches off, each
+#: with the fields it sets to 0 (as numbered there: 1 fade, 2 grain, 3 blobs, 4 edge blur,
+#: 5 scale errors).
+DEPTH_ERROR_PARTS = {
+    "fade": ("fade_prob",),
+    "grain": ("grain_log_std",),
+    "blobs": ("artifact_rate",),
+    "blur": ("edge_blur_px",),
+    "scale": ("scale_log_bias", "scale_log_std", "field_rel0", "field_rel_per_m"),
+}
+
+
 @dataclass(frozen=True)
 class DetectorErrors:
     """How the monocular 3D detector's output departs from the ground truth.
@@ -229,6 +241,29 @@ class Condition:
 
     def __post_init__(self):
         _check_range(self, "rare_per_scene", 0.0, 100.0)
+
+
+def without_depth_errors(condition: Condition, parts) -> Condition:
+    """``condition`` with parts of its depth network's error switched off: an ablation.
+
+    What the monitor does with a better depth network, the scene and the detector as they
+    were: each part of :data:`DEPTH_ERROR_PARTS` named in ``parts`` has its fields set to 0.
+    With every part off the estimate is the true depth (clipped to ``max_depth``, where a
+    network's output saturates). The name stays the condition's (the scenes drawn are its
+    scenes); the description says what was switched off.
+
+    Raises
+    ------
+    ValueError
+        An unknown part; the message lists the known ones.
+    """
+    parts = tuple(parts)
+    unknown = [p for p in parts if p not in DEPTH_ERROR_PARTS]
+    if unknown:
+        raise ValueError(f"depth error parts {unknown!r}: expected some of {', '.join(DEPTH_ERROR_PARTS)}")
+    off = {field: 0.0 for part in parts for field in DEPTH_ERROR_PARTS[part]}
+    return replace(condition, depth=replace(condition.depth, **off),
+                   description=f"{condition.description}; depth without {', '.join(parts)}")
 
 
 def _check_interval(owner: object, name: str, low: float, high: float) -> None:

@@ -6,7 +6,9 @@ described by a :class:`Benchmark` (and reproduced by it). Scene ``k`` of conditi
 depth prior comes from separate nominal training scenes (seeds ``seed + 100000 + k``), as
 the paper averages the training frames' inverse depth. The split into training and test
 scenes is by scene, never by frame: the last ``test_scenes`` scenes of each condition are
-the test scenes (the paper holds out four per condition).
+the test scenes (the paper holds out four per condition). ``depth_off`` switches parts of
+the depth network's error off in every scene and in the prior's
+(:func:`~monitor.synthetic.without_depth_errors`): an ablation.
 
 These are synthetic stand-ins for nuScenes, PGD and ZoeDepth: every report built on them
 says so.
@@ -20,7 +22,7 @@ import numpy as np
 
 from monitor.geometry.camera import Camera
 from monitor.depth.prior import build_prior
-from monitor.synthetic import CONDITIONS, generate_frames
+from monitor.synthetic import CONDITIONS, generate_frames, get_condition, without_depth_errors
 
 SYNTHETIC_NOTE = ("Data: synthetic driving scenes (monitor.synthetic), a stand-in for nuScenes, "
                   "PGD detections and ZoeDepth depth maps; numbers on them are not the paper's.")
@@ -28,7 +30,8 @@ SYNTHETIC_NOTE = ("Data: synthetic driving scenes (monitor.synthetic), a stand-i
 
 @dataclass(frozen=True)
 class SceneSource:
-    """A scene to be generated: its name, condition, seed and split; ``frames`` generates it."""
+    """A scene to be generated: its name, condition, seed and split; ``frames`` generates it
+    (with the parts of the depth network's error named in ``depth_off`` switched off)."""
 
     name: str
     condition: str
@@ -36,10 +39,17 @@ class SceneSource:
     split: str  # "train" or "test"
     n_frames: int
     camera: Camera
+    depth_off: tuple[str, ...] = ()
 
     @property
     def frames(self) -> Iterator:
-        return generate_frames(self.condition, self.seed, n_frames=self.n_frames, camera=self.camera)
+        return generate_frames(_ablated(self.condition, self.depth_off), self.seed, n_frames=self.n_frames,
+                               camera=self.camera)
+
+
+def _ablated(condition: str, depth_off: tuple[str, ...]):
+    """The condition's name, or its Condition with ``depth_off`` switched off."""
+    return without_depth_errors(get_condition(condition), depth_off) if depth_off else condition
 
 
 @dataclass(frozen=True)
@@ -58,6 +68,8 @@ class Benchmark:
     prior_scenes : int >= 1
         Nominal scenes whose frames make the inverse-depth prior.
     seed : int >= 0
+    depth_off : tuple of str
+        Parts of :data:`~monitor.synthetic.DEPTH_ERROR_PARTS` switched off (an ablation).
     """
 
     conditions: tuple[str, ...] = tuple(CONDITIONS)
@@ -66,6 +78,7 @@ class Benchmark:
     n_frames: int = 20
     prior_scenes: int = 2
     seed: int = 0
+    depth_off: tuple[str, ...] = ()
 
     def __post_init__(self):
         unknown = [c for c in self.conditions if c not in CONDITIONS]
@@ -79,6 +92,7 @@ class Benchmark:
                              f"{self.scenes_per_condition}]")
         if self.seed < 0:
             raise ValueError(f"seed = {self.seed}, must be >= 0")
+        without_depth_errors(CONDITIONS["nominal"], self.depth_off)  # names the unknown parts
 
     @property
     def camera(self) -> Camera:
@@ -94,7 +108,7 @@ class Benchmark:
                 part = "test" if k >= self.scenes_per_condition - self.test_scenes else "train"
                 if split in (None, part):
                     out.append(SceneSource(f"{condition}-{seed}", condition, seed, part, self.n_frames,
-                                           self.camera))
+                                           self.camera, self.depth_off))
         return out
 
     def prior(self, progress: Callable[[], None] | None = None) -> np.ndarray:
@@ -102,7 +116,8 @@ class Benchmark:
         def depths():
             for k in range(self.prior_scenes):
                 seed = self.seed + 100000 + k
-                for frame in generate_frames("nominal", seed, n_frames=self.n_frames, camera=self.camera):
+                for frame in generate_frames(_ablated("nominal", self.depth_off), seed, n_frames=self.n_frames,
+                                             camera=self.camera):
                     if progress is not None:
                         progress()
                     yield f"prior-{seed}/{frame.index}", frame.depth_est

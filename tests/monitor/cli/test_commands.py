@@ -116,6 +116,19 @@ def test_eval_without_a_bootstrap_has_no_intervals(tmp_path, capsys):
     assert "--bootstrap -1: must be >= 0 (0: no intervals)" in capsys.readouterr().err
 
 
+def test_eval_of_a_depth_ablation_says_so(tmp_path, capsys):
+    out = tmp_path / "eval"
+    assert main(["eval", "-o", str(out), "--bootstrap", "0", "--no-depth-error", "scale", "all", *SMALL]) == 0
+    note = ("An ablation: the depth network's fade, grain, blobs, blur, scale switched off "
+            "(`monitor.synthetic.without_depth_errors`)")
+    assert note in (out / "report.md").read_text()
+    assert note in json.loads((out / "tables.json").read_text())["note"]
+    assert main(["eval", "-o", str(tmp_path / "e2"), "--no-depth-error", "blobs", "--scene-dir", str(tmp_path),
+                 "--prior", str(tmp_path / "prior.npy")]) == 2
+    assert "--no-depth-error switches off errors of the synthetic depth network, not of --scene-dir" in \
+        capsys.readouterr().err
+
+
 def test_eval_refuses_an_empty_rules_folder(tmp_path, capsys):
     assert main(["eval", "-o", str(tmp_path / "e"), "--rules-dir", str(tmp_path), *SMALL]) == 2
     assert f"no rule bases (.yaml, .fis) in {tmp_path}" in capsys.readouterr().err

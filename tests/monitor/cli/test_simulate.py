@@ -1,4 +1,5 @@
-"""fuzzrisk simulate: a tiny run end to end, outputs kept unless --overwrite, serial = parallel."""
+"""fuzzrisk simulate: a tiny run end to end, outputs kept unless --overwrite, serial = parallel, the
+depth ablation."""
 import json
 
 import numpy as np
@@ -11,9 +12,12 @@ from monitor.cli.simulate import OUTPUTS, SWEEP_OUTPUTS, drive_all, sweep_settin
 from monitor.config import ShieldConfig, load_config  # noqa: E402
 from monitor.depth.prior import build_prior  # noqa: E402
 from monitor.geometry.camera import Camera  # noqa: E402
+from monitor.offline.closed_loop import Perception, run_scenario  # noqa: E402
 from monitor.offline.scenarios import ScenarioSpec  # noqa: E402
+from monitor.risk_monitor import RiskMonitor  # noqa: E402
 from monitor.shipped import shipped_rules  # noqa: E402
-from monitor.synthetic import generate_frames  # noqa: E402
+from monitor.synthetic import CONDITIONS, generate_frames, without_depth_errors  # noqa: E402
+import fuzzcore  # noqa: E402
 
 
 def test_simulate_smoke(tmp_path, capsys):
@@ -51,11 +55,17 @@ def test_simulate_rejects_bad_arguments(tmp_path, capsys):
     assert not (tmp_path / "x").exists()  # checked before any work
 
 
-def test_serial_and_parallel_agree():
+def _small_world():
+    """A quarter-size camera and its prior."""
     front = Camera.nuscenes_front()
     camera = Camera(np.diag([0.25, 0.25, 1.0]) @ front.K, 400, 225, front.cam_to_ego)
     prior = build_prior((str(f.index), f.depth_est)
                         for f in generate_frames("nominal", 100000, n_frames=6, camera=camera)).mean()
+    return camera, prior
+
+
+def test_serial_and_parallel_agree():
+    camera, prior = _small_world()
     shield = load_config().shield
     jobs = [(ScenarioSpec("cut-in", "snow", 1), [shield]), (ScenarioSpec("pedestrian", "night", 2), [shield]),
             (ScenarioSpec("rare-object", "noise", 3), [shield])]
@@ -64,3 +74,30 @@ def test_serial_and_parallel_agree():
     parallel = drive_all(jobs, rules, None, prior, camera, workers=2)
     assert [[r.to_dict() for r in runs] for runs in serial] == [[r.to_dict() for r in runs] for runs in parallel]
     assert [runs[0].kind for runs in parallel] == ["cut-in", "pedestrian", "rare-object"]
+
+
+def test_depth_ablation_drives_the_condition_without_those_errors():
+    camera, prior = _small_world()
+    shield = load_config().shield
+    spec = ScenarioSpec("rare-object", "snow", 4)
+    rules = str(shipped_rules())
+    [ablated] = drive_all([(spec, [shield])], rules, None, prior, camera, workers=1, depth_off=("blobs", "scale"))
+    [shipped] = drive_all([(spec, [shield])], rules, None, prior, camera, workers=1)
+    monitor = RiskMonitor(fuzzcore.load(rules), prior, camera, load_config(), explain=False)
+    expected = run_scenario(spec, Perception(camera), monitor, [shield], from_onset=True,
+                            condition=without_depth_errors(CONDITIONS["snow"], ["blobs", "scale"]))
+    dicts = [[r.to_dict() for r in runs] for runs in (ablated, expected, shipped)]
+    assert dicts[0] == dicts[1]
+    assert dicts[0][1]["history"]["risk"] != dicts[2][1]["history"]["risk"]  # the shield saw another depth
+    assert dicts[0][0]["history"] == dicts[2][0]["history"]  # the baseline sees only the detector
+
+
+def test_simulate_says_what_it_switched_off(tmp_path):
+    out = tmp_path / "sim"
+    assert main(["simulate", "--scenarios", "1", "--kind", "hazard-free", "--condition", "nominal",
+                 "--no-depth-error", "blobs", "all", "-o", str(out)]) == 0
+    summary = (out / "summary.md").read_text()
+    assert "--sweep 0 --no-depth-error fade grain blobs blur scale --workers 1`" in summary
+    assert "An ablation: the depth network's fade, grain, blobs, blur, scale switched off" in summary
+    assert json.loads((out / "summary.json").read_text())["depth_errors_off"] == [
+        "fade", "grain", "blobs", "blur", "scale"]

@@ -11,12 +11,15 @@ from monitor.geometry.camera import Camera, project_boxes
 from monitor.datasets.frames import (
     LABEL_MARKING, LABEL_ROAD, LABEL_SIDEWALK, LABEL_SKY, LABEL_STRUCTURE,
 )
-from monitor.synthetic import CONDITIONS, generate_frames, generate_scene, get_condition, shade
+from monitor.synthetic import (
+    CONDITIONS, DEPTH_ERROR_PARTS, generate_frames, generate_scene, get_condition, shade, without_depth_errors,
+)
 from monitor.synthetic.conditions import DETECTOR_CLASSES, DepthErrors, DetectorErrors
 from monitor.synthetic.degrade import (
     detect, detection_probability, estimate_depth, lognormal_blocks, smooth_field,
 )
 from monitor.synthetic.raycast import ground_points, render_depth, render_depth_reference
+from monitor.synthetic.suite import Benchmark
 from monitor.synthetic.scene import (
     ACTOR_CLASSES, EGO_FRONT_M, EGO_HALF_WIDTH_M, EGO_REAR_M, make_layout,
 )
@@ -386,6 +389,52 @@ def test_fade_blends_objects_into_the_background_and_output_is_capped():
     inside = half[5:10, 5:10]
     assert np.all(inside >= np.exp(0.5 * np.log(4.0) + 0.5 * np.log(30.0)) * (1 - 1e-6))
     assert np.all(inside <= 30.0 * (1 + 1e-6))
+
+
+def test_without_depth_errors_sets_only_the_named_parts_to_zero():
+    snow = CONDITIONS["snow"]  # every part of its depth error is on
+    fields = {f for part in DEPTH_ERROR_PARTS.values() for f in part}
+    assert all(getattr(snow.depth, f) != 0 for f in fields - {"scale_log_bias"})
+    for part, zeroed in DEPTH_ERROR_PARTS.items():
+        ablated = without_depth_errors(snow, [part])
+        assert (ablated.name, ablated.detector, ablated.rare_per_scene) == ("snow", snow.detector, snow.rare_per_scene)
+        for name in vars(snow.depth):
+            expected = 0.0 if name in zeroed else getattr(snow.depth, name)
+            assert getattr(ablated.depth, name) == expected, (part, name)
+        assert ablated.description.endswith(f"depth without {part}")
+    with pytest.raises(ValueError, match=r"\['glare'\].*fade, grain, blobs, blur, scale"):
+        without_depth_errors(snow, ["blobs", "glare"])
+
+
+def test_depth_without_any_error_is_the_true_depth_capped():
+    camera = small_front_camera(0.1)
+    boxes = np.array([[9.0, 0.0, 0.9, 2.0, 4.5, 1.8, 0.0], [15.0, -4.0, 0.85, 0.7, 0.7, 1.7, 1.0]])
+    render = render_depth(camera, boxes)
+    exact = without_depth_errors(CONDITIONS["night"], DEPTH_ERROR_PARTS)
+    for seed in range(5):
+        est = estimate_depth(render.depth, render.labels, render.background, exact.depth,
+                             np.random.default_rng(seed), px_scale=0.1)
+        np.testing.assert_array_equal(est, np.minimum(render.depth, np.float32(exact.depth.max_depth)))
+    noisy = estimate_depth(render.depth, render.labels, render.background, CONDITIONS["night"].depth,
+                           np.random.default_rng(0), px_scale=0.1)
+    assert not np.array_equal(noisy, np.minimum(render.depth, np.float32(80.0)))
+
+
+def test_benchmark_ablation_makes_its_scenes_and_prior_without_those_errors():
+    exact = Benchmark(conditions=("snow",), scenes_per_condition=1, n_frames=2, prior_scenes=1,
+                      depth_off=tuple(DEPTH_ERROR_PARTS))
+    [scene] = exact.scenes()
+    for frame in scene.frames:
+        np.testing.assert_array_equal(frame.depth_est, np.minimum(frame.depth_true, np.float32(80.0)))
+    true_prior = np.mean([1.0 / np.minimum(f.depth_true.astype(np.float64), 80.0)
+                          for f in generate_frames("nominal", 100000, n_frames=2)], axis=0)
+    np.testing.assert_allclose(exact.prior(), true_prior, rtol=1e-6)
+    [scene] = Benchmark(conditions=("snow",), scenes_per_condition=1, n_frames=2, depth_off=("blobs",)).scenes()
+    expected = generate_frames(without_depth_errors(CONDITIONS["snow"], ["blobs"]), scene.seed, n_frames=2)
+    for got, want in zip(scene.frames, expected, strict=True):
+        np.testing.assert_array_equal(got.depth_est, want.depth_est)
+    with pytest.raises(ValueError, match="glare"):
+        Benchmark(depth_off=("glare",))
 
 
 def test_estimated_depth_is_finite_positive_and_reproducible_in_every_condition():
