@@ -247,17 +247,18 @@ def markdown(summary: dict, points: list, default: str, n_scenarios: int, second
     if summary.get("depth_errors_off"):
         lines += [ablation_note(tuple(summary["depth_errors_off"])), ""]
     lines += [f"Shield `{default}`; {n_scenarios} scenarios, {seconds:.0f} s with {workers} worker(s). "
-              "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time).", "",
-              "## Hazards (baseline collisions avoided by the shield)", "",
-              "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
-              "avoidable: avoided by the shield switched on at the onset | "
-              "avoidable, detector missed: avoided | avoidable once in the path: avoided | unavoidable | "
-              "impact v (shield) | shield-only | rear-ended |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "Brackets: 95 % intervals (Wilson's for rates; t for the mean added trip time)."]
+    hazard_kinds = [kind for kind in summary["by_kind_condition"] if kind != "hazard-free"]
+    if hazard_kinds:
+        lines += ["", "## Hazards (baseline collisions avoided by the shield)", "",
+                  "| kind | condition | runs | base coll. | shield coll. | avoided | avoidable: avoided | "
+                  "avoidable: avoided by the shield switched on at the onset | "
+                  "avoidable, detector missed: avoided | avoidable once in the path: avoided | unavoidable | "
+                  "impact v (shield) | shield-only | rear-ended |",
+                  "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     rows = []
-    for kind, by_condition in summary["by_kind_condition"].items():
-        if kind == "hazard-free":
-            continue
+    for kind in hazard_kinds:
+        by_condition = summary["by_kind_condition"][kind]
         for condition, m in list(by_condition.items()) + [("all", summary["by_kind"][kind])]:
             rows.append(f"| {kind} | {condition} | {m['runs']} | {_pct(m['baseline_collision_rate'])} | "
                         f"{_pct(m['shielded_collision_rate'])} | {_pct(m['avoidance_rate'])} | "

@@ -99,5 +99,6 @@ def test_simulate_says_what_it_switched_off(tmp_path):
     summary = (out / "summary.md").read_text()
     assert "--sweep 0 --no-depth-error fade grain blobs blur scale --workers 1`" in summary
     assert "An ablation: the depth network's fade, grain, blobs, blur, scale switched off" in summary
+    assert "## Hazard-free drives" in summary and "## Hazards" not in summary  # no hazard kind, no table
     assert json.loads((out / "summary.json").read_text())["depth_errors_off"] == [
         "fade", "grain", "blobs", "blur", "scale"]

@@ -409,6 +409,7 @@ def test_measures_by_hand():
     assert h["avoidance_rate_avoidable_from_onset"] == pytest.approx(1 / 2)
     assert h["avoidance_rate_avoidable_from_onset_interval"] == sm.wilson_interval(1, 2)
     table = markdown({**s, "command": "fuzzrisk simulate"}, [], shield, 7, 1.0, 1, None)
+    assert "## Hazards (baseline collisions" in table and "## Hazard-free drives" in table
     assert re.search(r"\| rare-object \| all \| 4 \| 75% \| 25% \| 67% \| 50% of 2 \[\d+%, \d+%\] \| "
                      r"50% \[\d+%, \d+%\] \| ", table)
     assert (h["avoidable_missed_collisions"], h["avoidance_rate_avoidable_missed"]) == (1, 1.0)  # seed 0
