@@ -252,6 +252,14 @@ class ShieldConfig:
         sighted again, a remembered object that lies in the path within reach keeps the
         shield engaged (or engages it again) whatever the frame shows. One not sighted for
         this long is forgotten. None: no memory, the hold alone keeps the shield engaged.
+    walker_horizon : float > 0 or None
+        With a path gate, seconds: a walker the detector reports (:mod:`monitor.walkers`,
+        tracked on the road) who walks towards the path from beside it and, at her lateral
+        speed, reaches its edge (her half width beside it) within the time the car needs to
+        reach her or this horizon, whichever is sooner, engages the shield whatever the risk
+        when she stands within reach (``emergency`` within the emergency reach). The shield
+        then needs each frame's walkers (:meth:`monitor.shield.Shield.update`). None: no
+        walker gate.
     """
 
     threshold: float = 0.3
@@ -270,6 +278,7 @@ class ShieldConfig:
     confirm_edge: float | None = None
     confirm_emerged: float | None = None
     memory: float | None = 1.0
+    walker_horizon: float | None = None
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -320,6 +329,15 @@ class ShieldConfig:
             if not (math.isfinite(memory) and memory > 0):
                 raise ValueError(f"memory = {self.memory!r}, must be > 0 seconds (or null: no memory)")
             _set(self, "memory", memory)
+        if self.walker_horizon is not None:
+            horizon = _number(self.walker_horizon, "walker_horizon")
+            if not (math.isfinite(horizon) and horizon > 0):
+                raise ValueError(f"walker_horizon = {self.walker_horizon!r}, must be > 0 seconds (or null: no "
+                                 "walker gate)")
+            if self.path_half_width is None:
+                raise ValueError(f"walker_horizon = {horizon:g} needs a path gate (path_half_width), which is "
+                                 "null: set both, or walker_horizon to null")
+            _set(self, "walker_horizon", horizon)
 
 
 @dataclass(frozen=True)

@@ -83,6 +83,17 @@ braked for through the frames it misses, and the car that stopped short of it do
 creep into it after the hold; an artefact in a new place each frame is sighted once and
 left to the hold.
 
+With ``walker_horizon`` the shield also engages for a walker the detector reports beside the
+path who walks into it (:mod:`monitor.walkers`): followed on the road over the last second,
+walking towards the centreline, and reaching the path's edge before the car reaches her (or
+within the horizon), within reach; it then requests ``emergency`` within the emergency
+reach, ``deceleration`` beyond it, whatever the frame's risk (the hold keeps it engaged
+after). The depth view and the detector see what stands in the path; a walker stepping in
+stood beside it a moment before, where only her motion tells she is coming. The baseline's
+planner in the closed loop brakes only for what stands in its path, so this gate supplies
+the walker prediction that planner lacks, on what the detector reports, not on what it
+misses (docs/closed-loop.md).
+
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
 """
@@ -96,10 +107,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from monitor.config import ShieldConfig
+from monitor.walkers import WalkerTracks, entering
 
 
 #: what keeps the shield engaged in a frame (:attr:`ShieldDecision.cause`)
-CAUSES = ("risk", "no view", "at once", "confirmed", "remembered", "held")
+CAUSES = ("risk", "no view", "at once", "confirmed", "remembered", "walker", "held")
 
 
 @dataclass(frozen=True)
@@ -118,7 +130,8 @@ class ShieldDecision:
         threshold (the paper's shield, or a NaN risk); with a path gate, ``no view``, a frame
         without a view; ``at once``, an unseen object in the path within reach that needs no
         confirmation; ``confirmed``, one that did and got it; ``remembered``, a remembered
-        object (``memory``); ``held``, kept by the hold (or the hysteresis) after the last
+        object (``memory``); ``walker``, a walker stepping into the path
+        (``walker_horizon``); ``held``, kept by the hold (or the hysteresis) after the last
         of those.
     objects : tuple of (x, y_min, y_max)
         With ``at once`` and ``confirmed``, the unseen objects that counted (ego frame,
@@ -158,6 +171,8 @@ def describe_shield(config: ShieldConfig) -> str:
         parts.append(f"emergency {config.emergency:g} m/s^2")
     if config.path_half_width is not None and config.memory is not None:
         parts.append(f"objects remembered {config.memory:g} s")
+    if config.walker_horizon is not None:
+        parts.append(f"walkers stepping in within {config.walker_horizon:g} s")
     return ", ".join(parts)
 
 
@@ -205,6 +220,7 @@ class Shield:
         # remembered objects: x, y_min, y_max where last sighted, its time, the odometer then,
         # the number of sightings
         self._memory = np.zeros((0, 6))
+        self._walkers = WalkerTracks()  # the detector's walkers (walker_horizon)
 
     def reach(self, speed: float, deceleration: float | None = None) -> float:
         """Metres ahead of the front bumper in which an unseen object counts at ``speed``
@@ -216,7 +232,7 @@ class Shield:
         return speed * speed / (2.0 * decel) + speed * c.headway + c.margin
 
     def update(self, risk: float, speed: float | None = None, unseen=None,
-               time: float | None = None, emerged=None) -> ShieldDecision:
+               time: float | None = None, emerged=None, walkers=None) -> ShieldDecision:
         """The decision for the next frame.
 
         Parameters
@@ -230,12 +246,17 @@ class Shield:
             ego frame, metres); None for a frame without a view. Read only with a path gate.
         time : float, optional
             The frame's time, seconds, increasing; needed with a path gate that confirms
-            (``confirm_frames > 1``, the default), ignored otherwise.
+            (``confirm_frames > 1``, the default), remembers (``memory``) or watches walkers
+            (``walker_horizon``), ignored otherwise.
         emerged : ndarray of shape (k,), optional
             :meth:`monitor.RiskMonitor.emerged` of the frame's report: one share in [0, 1]
             (or NaN: not known) per row of ``unseen``; None: not measured, which a path gate
             that confirms with ``confirm_emerged`` refuses for a frame with a view. Read
             only by such a gate.
+        walkers : ndarray of shape (w, 2), optional
+            ``x, y`` (ego frame, metres) of the walkers the detector reports in the frame
+            (:func:`monitor.walkers.walker_positions`); needed with ``walker_horizon``,
+            which refuses None, and read only then.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
@@ -244,11 +265,15 @@ class Shield:
         decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
             decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged)
+        walker = 0.0 if c.walker_horizon is None else self._walker(float(speed), walkers)
         cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
-            self._decel = max(decel, c.deceleration)
+            self._decel = max(decel, c.deceleration, walker)
             cause = "risk" if math.isnan(risk) else why
+        elif walker > 0.0:
+            self.engaged, self._since_trigger, self._decel = True, 0, walker
+            cause = "walker"
         elif self.engaged:
             self._since_trigger += 1
             if kept > 0.0:
@@ -296,12 +321,13 @@ class Shield:
             if emerged.shape != (k,) or np.any(np.abs(emerged - 0.5) > 0.5):
                 raise ValueError(f"emerged = {emerged.tolist()}: expected one share in [0, 1] (or NaN) per "
                                  f"row of unseen, shape ({k},) (RiskMonitor.emerged)")
-        if c.confirm_frames > 1 or c.memory is not None:
+        if c.confirm_frames > 1 or c.memory is not None or c.walker_horizon is not None:
             if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time) \
                     or (self._time is not None and not time > self._time):
                 last = f" (the last frame's was {self._time!r})" if self._time is not None else ""
-                raise ValueError(f"time = {time!r}{last}: a shield whose gate confirms (confirm_frames > 1) "
-                                 "or remembers (memory) needs each frame's time, finite seconds, increasing")
+                raise ValueError(f"time = {time!r}{last}: a shield whose gate confirms (confirm_frames > 1), "
+                                 "remembers (memory) or watches walkers (walker_horizon) needs each frame's "
+                                 "time, finite seconds, increasing")
             time = float(time)
             if self._time is not None:
                 self._odometer += float(speed) * (time - self._time)
@@ -349,6 +375,23 @@ class Shield:
         if c.confirm_frames > 1:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
         return decel, (0.0 if c.memory is None else self._remembered(float(speed))), why, counted
+
+    def _walker(self, speed: float, walkers) -> float:
+        """The deceleration the walkers stepping into the path within reach call for, m/s^2
+        (0.0 for none): ``emergency`` for one within the emergency reach, else
+        ``deceleration``. Adds the frame's ``walkers`` to the tracks (after :meth:`_in_path`
+        moved the odometer to this frame)."""
+        c = self.config
+        if walkers is None:
+            raise ValueError(f"walkers = None: a shield that watches walkers (walker_horizon = "
+                             f"{c.walker_horizon:g} s) needs the frame's walkers, (w, 2) rows x, y "
+                             "(monitor.walkers.walker_positions of the frame's detections)")
+        tracks = self._walkers.update(walkers, self._time, self._odometer)
+        stepping = tracks[entering(tracks, c.path_half_width, c.front, speed, c.walker_horizon)]
+        ahead = stepping[:, 0] - c.front
+        if c.emergency is not None and np.any(ahead <= self.reach(speed, c.emergency)):
+            return c.emergency
+        return c.deceleration if np.any(ahead <= self.reach(speed)) else 0.0
 
     def _renew(self, sightings: np.ndarray, time: float) -> None:
         """Renew, at the sighting, each remembered object where one of ``sightings`` (k, 3)

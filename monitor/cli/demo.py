@@ -34,6 +34,7 @@ from monitor.report.figures import save_fis_figure, save_frame_figure, save_risk
 from monitor.report.retrieval_figure import save_retrieval_figure
 from monitor.risk_monitor import INVALID_INPUT, NO_OBJECTS, NO_RULE_FIRED, NO_VIEW, OK, RiskMonitor, shift_earlier
 from monitor.shield import Shield, describe_shield
+from monitor.walkers import walker_positions
 from monitor.shipped import shipped_rules
 from monitor.report.tables import format_table
 from monitor.synthetic import CONDITIONS, shade
@@ -144,8 +145,11 @@ def run(args: argparse.Namespace) -> int:
             ob = observe(monitor, frame, scene.name, scene.condition)
             moved = frame.ego_speed * (frame.timestamp - times[-1]) if times else 0.0
             before, earlier = shift_earlier(earlier, ob.report, moved)
+            walkers = walker_positions(frame.det_boxes3d, frame.det_classes, frame.det_scores,
+                                       config.detections.min_score)
             decision = shield.update(ob.report.risk, speed=frame.ego_speed, unseen=ob.report.unseen,
-                                     time=frame.timestamp, emerged=monitor.emerged(ob.report, before))
+                                     time=frame.timestamp, emerged=monitor.emerged(ob.report, before),
+                                     walkers=walkers)
             obs_by_condition.setdefault(scene.condition, []).append(ob)
             split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None

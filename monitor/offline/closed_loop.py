@@ -81,6 +81,7 @@ from monitor.shield import Shield
 from monitor.synthetic import Condition, get_condition, render_depth
 from monitor.synthetic.degrade import REFERENCE_WIDTH_PX, Detections, detect, estimate_depth
 from monitor.synthetic.scene import EGO_FRONT_M, EGO_HALF_WIDTH_M
+from monitor.walkers import walker_positions
 
 BASELINE = "baseline"
 #: Appended to a shield's label for its drive switched on at the hazard's onset (``run_scenario``'s ``from_onset``).
@@ -475,6 +476,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 report = monitor.step(depth, dets.boxes3d, dets.scores)
                 before, earlier = shift_earlier(earlier, report, world.ego.speed * driver.dt)
                 emerged = monitor.emerged(report, before)
+                walkers = walker_positions(dets.boxes3d, dets.classes, dets.scores,
+                                           monitor.config.detections.min_score)
             else:  # no report of this frame: a shield switched on later knows none of the frames before it
                 earlier = []
             trusted = dets.boxes3d[dets.scores >= driver.min_score]
@@ -497,7 +500,7 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 engaged = False
                 if m.acting(onset):
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
-                                               time=world.time, emerged=emerged)
+                                               time=world.time, emerged=emerged, walkers=walkers)
                     if decision.engaged and not (m.run.history["engaged"] and m.run.history["engaged"][-1]):
                         m.run.engagements.append({"time": world.time, "speed": world.ego.speed,
                                                   "deceleration": decision.deceleration,

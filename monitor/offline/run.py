@@ -35,6 +35,7 @@ from monitor.geometry.camera import Camera
 from monitor.offline.evaluation import Observation, observe
 from monitor.risk_monitor import RiskMonitor
 from monitor.offline.parallel import ordered_map
+from monitor.walkers import walker_positions
 
 #: frames per chunk of a scene read from files (synthetic scenes are one chunk: they are
 #: generated from their start)
@@ -138,6 +139,10 @@ class FrameResult:
         None when the frame could not be processed.
     error : str
         Why not ("" when it was).
+    walkers : ndarray of shape (k, 2) or None
+        ``x, y`` (ego frame, metres) of the walkers the detector reports in the frame, for
+        the shield's walker gate (:func:`monitor.walkers.walker_positions` at the monitor's
+        ``detections.min_score``); None when the frame could not be processed.
     """
 
     scene: str
@@ -150,6 +155,7 @@ class FrameResult:
     has_ground_truth: bool
     observation: Observation | None = None
     error: str = ""
+    walkers: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -252,7 +258,9 @@ class ChunkProcessor:
             except ValueError as exc:
                 results.append(_result(record, condition, error=str(exc)))
                 continue
-            results.append(_result(record, condition,
+            walkers = walker_positions(frame.det_boxes3d, frame.det_classes, frame.det_scores,
+                                       self.monitor.config.detections.min_score)
+            results.append(_result(record, condition, walkers=walkers,
                                    observation=observe(self.monitor, frame, record.scene, condition)))
         return results
 

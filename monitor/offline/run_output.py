@@ -22,7 +22,8 @@ to frame are the only parts with state), given each frame's risk, time, the ego'
 report's unseen objects and what of them came out of the road since the frame before
 (:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a shield that
 confirms it); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
-``unseen`` and ``emerged``. A frame that could not be processed has status ``unprocessed``,
+``unseen``, ``emerged`` and ``walkers`` (the detector's walkers, for a shield that watches
+them). A frame that could not be processed has status ``unprocessed``,
 its ``error``, no risk and no shield decision (the shield keeps its state across it; the
 next frame has no frames before it to be compared with, as the first frame after a resume).
 """
@@ -78,7 +79,9 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     (1 - USC~; null without ground truth or none in range), ``emerged`` (per unseen object,
     the share of it that came out of the road since the frame before, null where not known;
     null without a view, and in every frame of a run whose shield does not confirm what came
-    out of the road: ``emerged``) and ``shield`` (``engaged``, ``deceleration`` m/s^2).
+    out of the road: ``emerged``), ``walkers`` (``[x, y]`` per walker the detector reports,
+    ego frame, metres: :attr:`FrameResult.walkers`) and ``shield`` (``engaged``,
+    ``deceleration`` m/s^2).
     An unprocessed frame has ``status`` "unprocessed", ``error``, and null ``risk`` and ``shield``.
     """
     row = {"scene": result.scene, "frame": result.index, "key": result.key, "token": result.token,
@@ -97,18 +100,18 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     target = _number(ob.target) if result.has_ground_truth else None
     stored = None if emerged is None else [_number(e) for e in emerged.tolist()]
     return {**row, **report.to_dict(), "alignment": alignment, "target": target, "emerged": stored,
-            "shield": {"engaged": engaged, "deceleration": deceleration}}
+            "walkers": result.walkers.tolist(), "shield": {"engaged": engaged, "deceleration": deceleration}}
 
 
 #: what a resume reads from a processed frame's line besides ``ego_speed``: what the shield
 #: replays from and the decision it must give again
-_REPLAYED = ("risk", "unseen", "emerged", "shield")
+_REPLAYED = ("risk", "unseen", "emerged", "walkers", "shield")
 
 
-def _stored_unseen(value):
-    """A line's ``unseen`` as the shield takes it: None, or (k, 3) rows (an empty list read
-    back from JSON has lost its shape)."""
-    return np.empty((0, 3)) if isinstance(value, list) and not value else value
+def _stored_rows(value, columns: int):
+    """A line's ``unseen`` (``columns`` 3) or ``walkers`` (2) as the shield takes it: None,
+    or (k, columns) rows (an empty list read back from JSON has lost its shape)."""
+    return np.empty((0, columns)) if isinstance(value, list) and not value else value
 
 
 def _stored_emerged(value):
@@ -263,8 +266,9 @@ class RunOutput:
         if processed:
             try:
                 decision = scene.shield.update(row["risk"], speed=row["ego_speed"],
-                                               unseen=_stored_unseen(row["unseen"]), time=row["time"],
-                                               emerged=_stored_emerged(row["emerged"]))
+                                               unseen=_stored_rows(row["unseen"], 3), time=row["time"],
+                                               emerged=_stored_emerged(row["emerged"]),
+                                               walkers=_stored_rows(row["walkers"], 2))
             except (ValueError, TypeError) as exc:
                 raise ValueError(f"{where}: the shield cannot replay this line ({exc}); pass --overwrite") \
                     from None
@@ -298,7 +302,7 @@ class RunOutput:
                 before, scene.earlier = shift_earlier(scene.earlier, report, moved)
                 emerged = unseen_emerged(report, before, self.retriever)
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
-                                               time=result.timestamp, emerged=emerged)
+                                               time=result.timestamp, emerged=emerged, walkers=result.walkers)
                 row = report_row(result, decision.engaged, decision.deceleration, emerged)
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)

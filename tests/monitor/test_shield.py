@@ -455,8 +455,8 @@ def test_the_memory_is_checked_and_named():
     with pytest.raises(ValueError, match="memory = 'long', must be a number"):
         ShieldConfig(memory="long")
     assert describe_shield(REMEMBERS).endswith("emergency 6 m/s^2, objects remembered 1 s")
-    with pytest.raises(ValueError, match=r"time = None: a shield whose gate confirms \(confirm_frames > 1\) "
-                                         r"or remembers \(memory\)"):
+    with pytest.raises(ValueError, match=r"time = None: a shield whose gate confirms \(confirm_frames > 1\), "
+                                         r"remembers \(memory\)"):
         Shield(replace(REMEMBERS, confirm_frames=1, confirm_window=1)).update(0.9, speed=1.0,
                                                                               unseen=np.zeros((0, 3)))
 
