@@ -89,10 +89,11 @@ walking towards the centreline, and reaching the path's edge before the car reac
 within the horizon), within reach; it then requests ``emergency`` within the emergency
 reach, ``deceleration`` beyond it, whatever the frame's risk (the hold keeps it engaged
 after). The depth view and the detector see what stands in the path; a walker stepping in
-stood beside it a moment before, where only her motion tells she is coming. The baseline's
-planner in the closed loop brakes only for what stands in its path, so this gate supplies
-the walker prediction that planner lacks, on what the detector reports, not on what it
-misses (docs/closed-loop.md).
+stood beside it a moment before, where only her motion tells she is coming. The closed
+loop's baseline planner predicts her path too, but only once its filter is sure of her
+speed, for a walker at 1 m/s when she is nearly in the path; this gate acts on a second of
+her positions. It acts on what the detector reports, not on what it misses: a backstop for
+the planner's walker prediction (docs/closed-loop.md).
 
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).

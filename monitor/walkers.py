@@ -2,7 +2,9 @@
 
 A pedestrian stepping out into the road is seen beside the path before she is in it: the
 detector reports her there, and what the car does about it is the planner's (the closed
-loop's baseline brakes only for what stands in its path). :class:`WalkerTracks` follows the
+loop's baseline predicts a track's path only once its Kalman filter is sure of the lateral
+speed, :mod:`monitor.offline.tracking`: for a walker at 1 m/s when she is nearly in the
+path). :class:`WalkerTracks` follows the
 detector's pedestrians from frame to frame where they stand on the road (the ego's travel
 added to their distance), and gives, for each one it followed long enough, where she is now
 and how fast she walks across the car's heading; :meth:`monitor.shield.Shield.update` engages
@@ -14,7 +16,9 @@ position joins the track whose last position (on the road) lies nearest within
 A track's lateral speed is the least-squares slope of its lateral positions over the last
 :data:`TRACK_WINDOW_S` seconds, given once it holds :data:`MIN_POINTS` positions spanning
 :data:`MIN_SPAN_S` there; a speed outside :data:`WALKING_SPEED` is no walker's (standing
-still within the detector's noise, or two people joined into one track).
+still within the detector's noise, or two people joined into one track). The frames must
+come at 10 Hz or so (the closed loop's rate): at nuScenes' 2 Hz keyframes three positions
+span a whole second and a walker moves 0.5-1 m between them; hardly a track forms.
 """
 from __future__ import annotations
 

@@ -490,3 +490,54 @@ def test_each_decision_says_why():
     causes = [remembers.update(0.9, speed=10.0, unseen=u, time=0.1 * k).cause
               for k, u in enumerate(far + [none])]
     assert causes == ["at once", "at once", "remembered"]
+
+
+# ------------------------------------------------------------------- the walker gate
+
+WATCHES = replace(STAGED, walker_horizon=1.0)  # hold 2 frames, emergency 6 m/s^2, walkers within 1 s
+
+
+def _crossing(config, x0, vy, frames, speed=8.0):
+    """Decisions for a walker standing on the road ``x0`` m ahead of the ego origin at the
+    start, 4 m to the left, walking across at ``vy`` m/s; the ego at ``speed``, 0.1 s frames,
+    risk 0, nothing unseen."""
+    shield = Shield(config)
+    return [shield.update(0.0, speed=speed, unseen=np.zeros((0, 3)), time=0.1 * k,
+                          walkers=[[x0 - speed * 0.1 * k, 4.0 + vy * 0.1 * k]]) for k in range(frames)]
+
+
+def test_a_walker_stepping_into_the_path_engages_when_her_line_reaches_it():
+    # at 8 m/s the reach ends 64 / 6 + 4 + 2 = 16.67 m ahead of the bumper, the emergency
+    # reach 64 / 12 + 6 = 11.33 m. Walking right at 1.5 m/s from y = 4, at frame k (k >= 2,
+    # three positions) she is 4 - 0.15 k to the left, 2.45 - 0.15 k from the path (half width
+    # 1.25 m + 0.3 m of her), and x0 - 3.8 - 0.8 k ahead of the bumper: more than 8 m, a
+    # second's travel, until k = 15, so the horizon (1 s, 1.5 m) decides: 2.45 - 0.15 k <= 1.5
+    # from k = 7 on (k = 6: 1.55 m). 24 m: 14.6 m ahead then, beyond the emergency reach
+    decisions = _crossing(WATCHES, 24.0, -1.5, 9)
+    assert [d.engaged for d in decisions] == [False] * 7 + [True, True]
+    assert [(d.cause, d.deceleration) for d in decisions[7:]] == [("walker", 3.0)] * 2
+    # 18 m: 8.6 m ahead at k = 7, within the emergency reach
+    assert [(d.cause, d.deceleration) for d in _crossing(WATCHES, 18.0, -1.5, 8)][6:] == \
+        [("", 0.0), ("walker", 6.0)]
+    # 30 m: 20.6 m ahead at k = 7, beyond the reach: not yet (at k = 12, 16.6 m, she is 0.65 m
+    # from the path, within the horizon: then)
+    assert [d.engaged for d in _crossing(WATCHES, 30.0, -1.5, 13)] == [False] * 12 + [True]
+
+
+def test_a_walker_along_the_kerb_or_walking_away_engages_nothing():
+    assert not any(d.engaged for d in _crossing(WATCHES, 24.0, 0.0, 20))
+    assert not any(d.engaged for d in _crossing(WATCHES, 24.0, 1.5, 20))
+    # without the gate the walkers are not read
+    assert not any(d.engaged for d in _crossing(STAGED, 24.0, -1.5, 20))
+
+
+def test_the_walker_gate_is_checked_and_named():
+    with pytest.raises(ValueError, match=r"walker_horizon = 0.0, must be > 0 seconds \(or null: no walker gate\)"):
+        ShieldConfig(walker_horizon=0.0)
+    with pytest.raises(ValueError, match="walker_horizon = 1 needs a path gate"):
+        ShieldConfig(walker_horizon=1, path_half_width=None)
+    assert describe_shield(WATCHES).endswith("emergency 6 m/s^2, walkers stepping in within 1 s")
+    with pytest.raises(ValueError, match=r"walkers = None: a shield that watches walkers \(walker_horizon = 1 s\)"):
+        Shield(WATCHES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0)
+    with pytest.raises(ValueError, match=r"walkers has shape \(2,\)"):
+        Shield(WATCHES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0, walkers=[1.0, 2.0])

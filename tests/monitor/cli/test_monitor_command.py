@@ -50,6 +50,21 @@ def emerging_run(recording, tmp_path_factory):
     return folder / "out", config
 
 
+@pytest.fixture(scope="module")
+def walking_run(recording, tmp_path_factory):
+    folder = tmp_path_factory.mktemp("walking")
+    config = folder / "walking.yaml"
+    config.write_text("shield:\n  walker_horizon: 1.0\n")
+    assert main(_argv(recording, folder / "out", "--config", str(config))) == 0
+    return folder / "out", config
+
+
+def _walkers(frame, config):
+    """The frame's detected pedestrians scoring the config's ``detections.min_score``, by hand."""
+    return [box[:2] for box, c, s in zip(frame.det_boxes3d.tolist(), frame.det_classes, frame.det_scores)
+            if c == "pedestrian" and s >= config.detections.min_score]
+
+
 def _replayed(frames, prior, config):
     """The monitor and shield of ``config`` run on ``frames`` in order: per frame the
     report, the emerged shares and the decision."""
@@ -60,7 +75,8 @@ def _replayed(frames, prior, config):
         earlier = [(r, s + frame.ego_speed * (frame.timestamp - last)) for r, s in earlier]
         emerged = mon.emerged(report, earlier)
         decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen,
-                                 time=frame.timestamp, emerged=emerged)
+                                 time=frame.timestamp, emerged=emerged,
+                                 walkers=np.array(_walkers(frame, config)).reshape(-1, 2))
         earlier, last = [(report, 0.0), *earlier][:2], frame.timestamp
         out.append((report, emerged, decision))
     return out
@@ -112,6 +128,18 @@ def test_a_shield_that_confirms_what_came_out_of_the_road_gets_it_per_frame(reco
     assert any(e is not None for r in rows[1:] for e in r["emerged"])
 
 
+def test_a_shield_that_watches_walkers_gets_the_detector_s_per_frame(recording, serial_run, walking_run):
+    _, frames, prior = recording
+    out, config = walking_run
+    rows = read_rows(out)["drive-a.jsonl"]
+    for frame, row, plain, (_, _, decision) in zip(frames, rows, read_rows(serial_run)["drive-a.jsonl"],
+                                                   _replayed(frames, prior, load_config(config)), strict=True):
+        assert row["walkers"] == plain["walkers"] == _walkers(frame, load_config(config))
+        assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
+        assert {k: v for k, v in row.items() if k != "shield"} == {k: v for k, v in plain.items() if k != "shield"}
+    assert sum(len(r["walkers"]) for r in rows) >= len(rows)  # the recording's streets have walkers
+
+
 def test_timelines_summary_and_run_file(serial_run):
     for name in ("drive-a.png", "drive-b.png"):
         assert (serial_run / "scenes" / name).stat().st_size > 1000
@@ -126,11 +154,11 @@ def test_two_workers_give_the_serial_reports(recording, serial_run, tmp_path):
     assert read_rows(tmp_path / "pool") == read_rows(serial_run)
 
 
-@pytest.mark.parametrize("run", ["serial_run", "emerging_run"])
+@pytest.mark.parametrize("run", ["serial_run", "emerging_run", "walking_run"])
 def test_an_interrupted_run_resumes_to_the_same_lines(recording, run, request, tmp_path, monkeypatch):
-    # the shipped shield, and one that replays the stored emerged shares as well
+    # the shipped shield, and ones that replay the stored emerged shares and walkers as well
     done, extra = request.getfixturevalue(run), ()
-    if run == "emerging_run":
+    if run != "serial_run":
         done, extra = done[0], ("--config", str(done[1]))
     out = tmp_path / "out"
     real = monitor_command.process_chunks
@@ -330,14 +358,16 @@ def test_a_tampered_ego_speed_does_not_replay(recording, gated_run, tmp_path, ca
         in capsys.readouterr().err
 
 
-def test_lines_without_the_ego_speed_are_refused_naming_the_field(recording, serial_run, tmp_path, capsys):
-    # lines written before the rows carried the ego's speed: a resume cannot replay them
+@pytest.mark.parametrize("name", ["ego_speed", "walkers"])
+def test_lines_without_a_replayed_field_are_refused_naming_it(recording, serial_run, tmp_path, capsys, name):
+    # lines written before the rows carried the ego's speed, or the walkers: a resume cannot
+    # replay them
     out = tmp_path / "out"
     shutil.copytree(serial_run, out)
     path = out / "scenes" / "drive-a.jsonl"
     rows = [json.loads(line) for line in path.read_text().splitlines()]
-    del rows[0]["ego_speed"]
+    del rows[0][name]
     path.write_text("".join(json.dumps(r) + "\n" for r in rows))
     assert main(_argv(recording, out)) == 2
-    assert "drive-a.jsonl: line 1: has no 'ego_speed' field, which a resume needs (a line of an older " \
+    assert f"drive-a.jsonl: line 1: has no {name!r} field, which a resume needs (a line of an older " \
            "fuzzrisk monitor?); pass --overwrite" in capsys.readouterr().err

@@ -227,6 +227,33 @@ def test_a_walker_detected_in_every_other_frame_the_planner_follows_its_track(mo
     assert avoidable == 10 and stopped >= 5
 
 
+def test_the_walker_gate_brakes_for_a_walker_the_detector_reports_before_she_steps_in(perception, monitor):
+    # a detector that reports every walker where she is and a planner that brakes only for
+    # what stands in its path now (no prediction): it hits the walker where she steps in
+    # less than a stopping distance ahead, and so does the shield without its walker gate
+    # (the detector covers her: nothing is unseen). With the gate the shield engages for her
+    # before she enters the path, and stops short wherever the gap then allows a stop at the
+    # emergency deceleration after the reaction time
+    driver = Driver(predict_s=0.0)
+    watching = replace(monitor.config.shield, walker_horizon=1.0)
+    hits = room = 0
+    for seed in range(7):
+        spec = ScenarioSpec("pedestrian", "nominal", seed)
+        base, plain, gated = run_scenario(spec, perception, monitor, [monitor.config.shield, watching],
+                                          driver=driver, condition=SHARP)
+        if not base.collided:
+            continue
+        hits += 1
+        assert plain.collided, seed
+        walker = [e for e in gated.engagements if e["cause"] == "walker"]
+        assert walker and walker[0]["time"] < base.onset["entry"]["time"], seed
+        k = gated.history["time"].index(walker[0]["time"])
+        if gated.history["gap"][k] > required_gap(gated.history["speed"][k], 6.0, driver.reaction):
+            room += 1
+            assert not gated.collided, seed
+    assert hits >= 5 and room >= 4
+
+
 def test_unseen_obstacle_baseline_collides_shield_stops(perception, monitor):
     seed = _rare_seed("parking")
     spec = ScenarioSpec("rare-object", "nominal", seed)

@@ -1,0 +1,101 @@
+"""The detector's walkers, tracked on the road: positions, association, the fitted lateral
+speed by hand, and which tracks step into the path."""
+import numpy as np
+import pytest
+
+from monitor.walkers import WalkerTracks, entering, walker_positions
+
+
+def test_walker_positions_keep_the_walkers_scoring_enough():
+    boxes = np.arange(28, dtype=np.float64).reshape(4, 7)
+    classes = np.array(["pedestrian", "car", "pedestrian", "pedestrian"])
+    scores = np.array([0.9, 0.9, 0.2, 0.3])
+    assert walker_positions(boxes, classes, scores, 0.3).tolist() == [[0.0, 1.0], [21.0, 22.0]]
+    assert walker_positions(np.zeros((0, 7)), np.array([], dtype=str), np.zeros(0), 0.3).shape == (0, 2)
+
+
+def _walk(tracks, points, speed=10.0, dt=0.1):
+    """Feed one walker's ego-frame ``(x, y)`` per frame, the ego at ``speed``; the last output."""
+    out = None
+    for k, (x, y) in enumerate(points):
+        out = tracks.update([[x, y]], time=dt * k, odometer=speed * dt * k)
+    return out
+
+
+def test_the_lateral_speed_is_the_least_squares_slope_by_hand():
+    # on the road x = 20, 20.2, 19.8, 20.0 (odometer 0, 1, 2, 3: ego-frame x = those minus it);
+    # y = 4.0, 3.95, 3.75, 3.7 at t = 0, 0.1, 0.2, 0.3: mean t 0.15, mean y 3.85,
+    # sum (t - 0.15)(y - 3.85) = -0.0225 - 0.005 - 0.005 - 0.0225 = -0.055, sum (t - 0.15)^2 =
+    # 0.05: slope -1.1 m/s; the line at t = 0.3: 3.85 - 1.1 * 0.15 = 3.685; x now: the median
+    # on the road, 20.0, minus the odometer, 3
+    tracks = WalkerTracks()
+    out = _walk(tracks, [(20.0, 4.0), (19.2, 3.95), (17.8, 3.75), (17.0, 3.7)])
+    assert out.shape == (1, 3)
+    assert out[0] == pytest.approx([17.0, 3.685, -1.1])
+
+
+def test_a_track_needs_three_positions_and_a_walking_speed():
+    tracks = WalkerTracks()
+    assert _walk(tracks, [(20.0, 4.0), (19.0, 3.9)]).shape == (0, 3)
+    assert _walk(WalkerTracks(), [(20.0 - k, 4.0) for k in range(5)]).shape == (0, 3)  # standing
+    assert _walk(WalkerTracks(), [(20.0 - k, 4.0 - 0.02 * k) for k in range(5)]).shape == (0, 3)  # 0.2 m/s
+    # 0.9 m per frame is within the association's 1 m but 9 m/s: no walker's
+    assert _walk(WalkerTracks(), [(20.0 - k, 4.0 - 0.9 * k) for k in range(5)]).shape == (0, 3)
+
+
+def test_the_fit_keeps_the_last_second():
+    # standing until t = 0.4, then walking right at 1.2 m/s: at t = 1.6 the window holds
+    # t = 0.6 .. 1.6, all walking
+    ys = [4.0] * 5 + [4.0 - 1.2 * 0.1 * k for k in range(1, 13)]
+    out = _walk(WalkerTracks(), [(30.0 - k, y) for k, y in enumerate(ys)])
+    assert out[0, 2] == pytest.approx(-1.2)
+    assert out[0, 1] == pytest.approx(ys[-1])
+
+
+def test_a_track_not_extended_for_half_a_second_is_dropped():
+    tracks = WalkerTracks()
+    for k in range(3):
+        tracks.update([[20.0, 4.0 - 0.1 * k]], time=0.1 * k, odometer=0.0)
+    # no detection: the track walks on, its line given where it puts her now
+    assert tracks.update(np.zeros((0, 2)), time=0.3, odometer=0.0)[0] == pytest.approx([20.0, 3.7, -1.0])
+    assert tracks.update([[20.0, 3.6]], time=0.4, odometer=0.0)[0, 2] == pytest.approx(-1.0)
+    # seen again 0.6 s later where the line puts her: a new track, one position
+    assert tracks.update([[20.0, 3.0]], time=1.0, odometer=0.0).shape == (0, 3)
+
+
+def test_association_one_position_per_track_the_nearest_within_a_metre():
+    tracks = WalkerTracks()
+    for k in range(3):  # two walkers 3 m apart, crossing towards each other
+        out = tracks.update([[20.0, 4.0 - 0.1 * k], [20.0, 1.0 + 0.1 * k]], time=0.1 * k, odometer=0.0)
+    assert sorted(out[:, 2].round(9).tolist()) == [-1.0, 1.0]
+    # two positions near one track's last (0.4 m and 0.6 m): the nearer extends it, the other
+    # starts a track; a position 1.5 m from every track starts one too
+    tracks = WalkerTracks()
+    for k in range(2):
+        tracks.update([[20.0, 4.0 - 0.1 * k]], time=0.1 * k, odometer=0.0)
+    out = tracks.update([[20.0, 3.5], [20.0, 4.5], [21.5, 3.9]], time=0.2, odometer=0.0)
+    # y 4.0, 3.9, 3.5 at t 0, 0.1, 0.2: (-0.1 * 0.2 + 0.1 * -0.3) / 0.02
+    assert out.shape == (1, 3) and out[0, 2] == pytest.approx(-2.5)
+
+
+def test_walkers_must_be_finite_rows_of_two():
+    with pytest.raises(ValueError, match=r"walkers has shape \(1, 3\): expected finite \(k, 2\) rows"):
+        WalkerTracks().update([[1.0, 2.0, 3.0]], time=0.0, odometer=0.0)
+    with pytest.raises(ValueError, match="expected finite"):
+        WalkerTracks().update([[np.nan, 2.0]], time=0.0, odometer=0.0)
+
+
+@pytest.mark.parametrize("x, y, vy, speed, expected", [
+    # path half width 1.25, her half width 0.3: her edge is |y| - 1.55 from the path's
+    (23.8, 2.5, -1.0, 10.0, True),    # 20 m ahead, 2 s away: within the 1 s horizon, 0.95 m <= 1.0 m
+    (23.8, 3.0, -1.0, 10.0, False),   # 1.45 m to go, 1.0 m in the horizon
+    (13.8, 2.5, -1.0, 20.0, False),   # 10 m ahead at 20 m/s: 0.5 s, the car is past first
+    (13.8, 2.5, -2.0, 20.0, True),    # ... unless she walks 2 m/s
+    (23.8, 2.5, 1.0, 10.0, False),    # walking away
+    (23.8, -2.5, 1.0, 10.0, True),    # from the right
+    (23.8, 1.5, -1.0, 10.0, False),   # in the path already (1.5 - 0.3 < 1.25): the view's to see
+    (3.0, 2.5, -1.0, 10.0, False),    # behind the bumper
+    (4.0, 1.9, -1.0, 0.0, True),      # a car at rest: 0.2 m ahead at 0.5 m/s, 0.4 s; 0.35 m to go
+])
+def test_entering_by_hand(x, y, vy, speed, expected):
+    assert entering(np.array([[x, y, vy]]), 1.25, 3.8, speed, 1.0).tolist() == [expected]
