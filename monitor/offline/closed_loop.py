@@ -301,8 +301,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
     `` n{confirm_near}`` when every object near the bumper is, `` g{confirm_edge}`` when every
     edge of the path is, `` o{confirm_emerged}`` when every object out of the road is),
-    `` e{emergency}`` for a gate with an emergency stage and `` m{memory}`` for one that
-    remembers."""
+    `` e{emergency}`` for a gate with an emergency stage, `` m{memory}`` for one that
+    remembers and `` w{walker_horizon}`` for one that watches walkers."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
@@ -320,6 +320,8 @@ def driver_label(config: ShieldConfig | None) -> str:
         gate += f" e{config.emergency:g}"
     if config.path_half_width is not None and config.memory is not None:
         gate += f" m{config.memory:g}"
+    if config.walker_horizon is not None:
+        gate += f" w{config.walker_horizon:g}"
     return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 

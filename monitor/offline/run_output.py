@@ -23,9 +23,9 @@ report's unseen objects and what of them came out of the road since the frame be
 (:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a shield that
 confirms it); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
 ``unseen``, ``emerged`` and ``walkers`` (the detector's walkers, for a shield that watches
-them). A frame that could not be processed has status ``unprocessed``,
-its ``error``, no risk and no shield decision (the shield keeps its state across it; the
-next frame has no frames before it to be compared with, as the first frame after a resume).
+them). A frame that could not be processed has status ``unprocessed``, its ``error``, no
+risk and no shield decision (the shield keeps its state across it; the next frame has no
+frames before it to be compared with, as the first frame after a resume).
 """
 from __future__ import annotations
 

@@ -22,8 +22,8 @@ baseline run of the same scenario:
   at once or once confirmed, a remembered one, a frame without a view, a walker stepping
   in) and what the nearest object that engaged it first really lay on (``on``,
   :mod:`monitor.offline.attribution`: the road, a car beside the path, ...), the share of
-  time spent braking and the **added trip time** (relative to the baseline's trip over the same
-  route).
+  time spent braking and the **added trip time** (relative to the baseline's trip over the
+  same route).
 
 The rates the goals are stated in (avoidance of the avoidable collisions, also of those the
 detector missed, and the false-brake rate) come with 95 % Wilson score intervals: each
