@@ -41,22 +41,22 @@ def serial_run(recording, tmp_path_factory):
     return out
 
 
-@pytest.fixture(scope="module")
-def emerging_run(recording, tmp_path_factory):
-    folder = tmp_path_factory.mktemp("emerging")
-    config = folder / "emerging.yaml"
-    config.write_text("shield:\n  confirm_emerged: 0.5\n")
+def _configured_run(recording, folder, shield: str):
+    """A run into ``folder / "out"`` with ``shield`` (YAML) as its config's shield section."""
+    config = folder / "config.yaml"
+    config.write_text(f"shield:\n  {shield}\n")
     assert main(_argv(recording, folder / "out", "--config", str(config))) == 0
     return folder / "out", config
+
+
+@pytest.fixture(scope="module")
+def emerging_run(recording, tmp_path_factory):
+    return _configured_run(recording, tmp_path_factory.mktemp("emerging"), "confirm_emerged: 0.5")
 
 
 @pytest.fixture(scope="module")
 def walking_run(recording, tmp_path_factory):
-    folder = tmp_path_factory.mktemp("walking")
-    config = folder / "walking.yaml"
-    config.write_text("shield:\n  walker_horizon: 1.0\n")
-    assert main(_argv(recording, folder / "out", "--config", str(config))) == 0
-    return folder / "out", config
+    return _configured_run(recording, tmp_path_factory.mktemp("walking"), "walker_horizon: 1.0")
 
 
 def _walkers(frame, config):
