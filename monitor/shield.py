@@ -108,7 +108,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from monitor.config import ShieldConfig
-from monitor.walkers import WalkerTracks, entering
+from monitor.walkers import BODY_HALF_WIDTH, WalkerTracks, entering
 
 
 #: what keeps the shield engaged in a frame (:attr:`ShieldDecision.cause`)
@@ -136,7 +136,9 @@ class ShieldDecision:
         of those.
     objects : tuple of (x, y_min, y_max)
         With ``at once`` and ``confirmed``, the unseen objects that counted (ego frame,
-        metres, as :attr:`monitor.RiskReport.unseen`); empty otherwise.
+        metres, as :attr:`monitor.RiskReport.unseen`); with ``walker``, the walkers stepping
+        in within reach, where they stand now (``y`` of her track's line, plus and minus
+        :data:`monitor.walkers.BODY_HALF_WIDTH`); empty otherwise.
     """
 
     engaged: bool
@@ -266,7 +268,7 @@ class Shield:
         decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
             decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged)
-        walker = 0.0 if c.walker_horizon is None else self._walker(float(speed), walkers)
+        walker, stepping = (0.0, ()) if c.walker_horizon is None else self._walker(float(speed), walkers)
         cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
@@ -274,7 +276,7 @@ class Shield:
             cause = "risk" if math.isnan(risk) else why
         elif walker > 0.0:
             self.engaged, self._since_trigger, self._decel = True, 0, walker
-            cause = "walker"
+            cause, counted = "walker", stepping
         elif self.engaged:
             self._since_trigger += 1
             if kept > 0.0:
@@ -286,7 +288,7 @@ class Shield:
         elif kept > 0.0:  # a remembered object came within reach again: no new hold
             self.engaged, self._since_trigger, self._decel = True, c.hold_frames, kept
             cause = "remembered"
-        if cause not in ("at once", "confirmed"):
+        if cause not in ("at once", "confirmed", "walker"):
             counted = ()
         return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk, cause, counted)
 
@@ -377,11 +379,12 @@ class Shield:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
         return decel, (0.0 if c.memory is None else self._remembered(float(speed))), why, counted
 
-    def _walker(self, speed: float, walkers) -> float:
+    def _walker(self, speed: float, walkers) -> tuple[float, tuple]:
         """The deceleration the walkers stepping into the path within reach call for, m/s^2
         (0.0 for none): ``emergency`` for one within the emergency reach, else
-        ``deceleration``. Adds the frame's ``walkers`` to the tracks (after :meth:`_in_path`
-        moved the odometer to this frame)."""
+        ``deceleration``; and those walkers as :attr:`ShieldDecision.objects` gives them.
+        Adds the frame's ``walkers`` to the tracks (after :meth:`_in_path` moved the
+        odometer to this frame)."""
         c = self.config
         if walkers is None:
             raise ValueError(f"walkers = None: a shield that watches walkers (walker_horizon = "
@@ -389,10 +392,12 @@ class Shield:
                              "(monitor.walkers.walker_positions of the frame's detections)")
         tracks = self._walkers.update(walkers, self._time, self._odometer)
         stepping = tracks[entering(tracks, c.path_half_width, c.front, speed, c.walker_horizon)]
-        ahead = stepping[:, 0] - c.front
-        if c.emergency is not None and np.any(ahead <= self.reach(speed, c.emergency)):
-            return c.emergency
-        return c.deceleration if np.any(ahead <= self.reach(speed)) else 0.0
+        stepping = stepping[stepping[:, 0] - c.front <= self.reach(speed)]
+        x, y = stepping[:, 0], stepping[:, 1]
+        objects = tuple(zip(x.tolist(), (y - BODY_HALF_WIDTH).tolist(), (y + BODY_HALF_WIDTH).tolist()))
+        if c.emergency is not None and np.any(x - c.front <= self.reach(speed, c.emergency)):
+            return c.emergency, objects
+        return (c.deceleration if len(x) else 0.0), objects
 
     def _renew(self, sightings: np.ndarray, time: float) -> None:
         """Renew, at the sighting, each remembered object where one of ``sightings`` (k, 3)

@@ -516,6 +516,8 @@ def test_a_walker_stepping_into_the_path_engages_when_her_line_reaches_it():
     decisions = _crossing(WATCHES, 24.0, -1.5, 9)
     assert [d.engaged for d in decisions] == [False] * 7 + [True, True]
     assert [(d.cause, d.deceleration) for d in decisions[7:]] == [("walker", 3.0)] * 2
+    # where she stands then: 24 - 0.8 * 7 = 18.4 m ahead of the ego origin, 2.95 m to the left
+    assert np.array(decisions[7].objects) == pytest.approx(np.array([[18.4, 2.95 - 0.3, 2.95 + 0.3]]))
     # 18 m: 8.6 m ahead at k = 7, within the emergency reach
     assert [(d.cause, d.deceleration) for d in _crossing(WATCHES, 18.0, -1.5, 8)][6:] == \
         [("", 0.0), ("walker", 6.0)]

@@ -248,6 +248,8 @@ def test_the_walker_gate_brakes_for_a_walker_the_detector_reports_before_she_ste
         assert plain.collided, seed
         walker = [e for e in gated.engagements if e["cause"] == "walker"]
         assert walker and walker[0]["time"] < base.onset["entry"]["time"], seed
+        # where she stood then, and what the frame shows there (her, or the car she steps out behind)
+        assert len(walker[0]["on"]) == len(walker[0]["objects"]) >= 1, seed
         k = gated.history["time"].index(walker[0]["time"])
         if gated.history["gap"][k] > required_gap(gated.history["speed"][k], 6.0, driver.reaction):
             room += 1
