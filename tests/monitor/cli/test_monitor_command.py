@@ -358,6 +358,26 @@ def test_a_tampered_ego_speed_does_not_replay(recording, gated_run, tmp_path, ca
         in capsys.readouterr().err
 
 
+def test_tampered_walkers_do_not_replay(recording, walking_run, tmp_path, capsys):
+    # the recording's walkers never walk into the path; stored ones that do make the replayed
+    # shield brake. The ego stands still (reach: the 2 m margin) and the frames are 0.5 s
+    # apart: a walker 1.2 m ahead of the bumper crossing at 1.5 m/s from 3.5 m to the left is,
+    # at the third frame, 2.0 - 0.3 - 1.25 = 0.45 m from the path, within a second's walk
+    out = tmp_path / "out"
+    shutil.copytree(walking_run[0], out)
+    path = out / "scenes" / "drive-a.jsonl"
+    rows = [json.loads(line) for line in path.read_text().splitlines()]
+    assert [r["time"] for r in rows[:3]] == [0.0, 0.5, 1.0] and {r["ego_speed"] for r in rows[:3]} == {0.0}
+    assert not any(r["shield"]["engaged"] for r in rows[:3])
+    for r, y in zip(rows, (3.5, 2.75, 2.0)):
+        r["walkers"] = [[5.0, y]]
+    path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    assert main(_argv(recording, out, "--config", str(walking_run[1]))) == 2
+    err = capsys.readouterr().err
+    assert "drive-a.jsonl: line 3: shield {'engaged': False, 'deceleration': 0.0} does not replay" in err
+    assert "deceleration=6.0" in err and "cause='walker'" in err
+
+
 @pytest.mark.parametrize("name", ["ego_speed", "walkers"])
 def test_lines_without_a_replayed_field_are_refused_naming_it(recording, serial_run, tmp_path, capsys, name):
     # lines written before the rows carried the ego's speed, or the walkers: a resume cannot
