@@ -195,10 +195,11 @@ class ShieldConfig:
     deceleration : float > 0
         Requested deceleration while engaged, m/s^2.
     path_half_width : float > 0 or None
-        None: the paper's shield, the risk alone decides. A number (metres): the risk
-        engages the shield only while a depth-view object no detection covers stands in the
-        ego's path (laterally within this of the ego's centreline) within its reach
-        (:meth:`monitor.shield.Shield.reach`); frames without a view are not gated.
+        None: the paper's shield (with ``walker_horizon`` None, which needs a path gate),
+        the risk alone decides. A number (metres): the risk engages the shield only while a
+        depth-view object no detection covers stands in the ego's path (laterally within
+        this of the ego's centreline) within its reach (:meth:`monitor.shield.Shield.reach`);
+        frames without a view are not gated.
     headway : float >= 0
         Seconds of travel the reach adds to the braking distance (the delay from frame to
         brakes, and then some).
@@ -278,7 +279,7 @@ class ShieldConfig:
     confirm_edge: float | None = None
     confirm_emerged: float | None = None
     memory: float | None = 1.0
-    walker_horizon: float | None = None
+    walker_horizon: float | None = 1.0
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -336,7 +337,7 @@ class ShieldConfig:
                                  "walker gate)")
             if self.path_half_width is None:
                 raise ValueError(f"walker_horizon = {horizon:g} needs a path gate (path_half_width), which is "
-                                 "null: set both, or walker_horizon to null")
+                                 "null: set both, or walker_horizon to null (as the paper's shield has it)")
             _set(self, "walker_horizon", horizon)
 
 

@@ -2,11 +2,11 @@
 
 The paper's shield starts to decelerate the vehicle whenever the monitor's risk exceeds a
 threshold (0.5); it is ``ShieldConfig(threshold=0.5, release=0.5, path_half_width=None,
-hold_frames=0)``. The default is path-gated with a 5-frame hold (below; docs/closed-loop.md),
-and its threshold is 0.3: the risk is a mean over every object the monitor knows of, so
-one unseen object among three or more detected ones reads under 0.5, and the gate, not
-the risk, tells whether that object is in the way. :class:`Shield` adds two
-refinements against chattering on a noisy risk stream:
+hold_frames=0, walker_horizon=None)``. The default is path-gated with a 5-frame hold (below;
+docs/closed-loop.md), and its threshold is 0.3: the risk is a mean over every object the
+monitor knows of, so one unseen object among three or more detected ones reads under 0.5,
+and the gate, not the risk, tells whether that object is in the way. :class:`Shield` adds
+two refinements against chattering on a noisy risk stream:
 
 - hysteresis: once engaged, it stays engaged until the risk falls to ``release`` or below
   (``release == threshold``, the default: no hysteresis);
@@ -83,17 +83,17 @@ braked for through the frames it misses, and the car that stopped short of it do
 creep into it after the hold; an artefact in a new place each frame is sighted once and
 left to the hold.
 
-With ``walker_horizon`` the shield also engages for a walker the detector reports beside the
-path who walks into it (:mod:`monitor.walkers`): followed on the road over the last second,
-walking towards the centreline, and reaching the path's edge before the car reaches her (or
-within the horizon), within reach; it then requests ``emergency`` within the emergency
-reach, ``deceleration`` beyond it, whatever the frame's risk (the hold keeps it engaged
-after). The depth view and the detector see what stands in the path; a walker stepping in
-stood beside it a moment before, where only her motion tells she is coming. The closed
-loop's baseline planner predicts her path too, but only once its filter is sure of her
-speed, for a walker at 1 m/s when she is nearly in the path; this gate acts on a second of
-her positions. It acts on what the detector reports, not on what it misses: a backstop for
-the planner's walker prediction (docs/closed-loop.md).
+With ``walker_horizon`` (1 s by default) the shield also engages for a walker the detector
+reports beside the path who walks into it (:mod:`monitor.walkers`): followed on the road
+over the last second, walking towards the centreline, and reaching the path's edge before
+the car reaches her (or within the horizon), within reach; it then requests ``emergency``
+within the emergency reach, ``deceleration`` beyond it, whatever the frame's risk (the hold
+keeps it engaged after). The depth view and the detector see what stands in the path; a
+walker stepping in stood beside it a moment before, where only her motion tells she is
+coming. The closed loop's baseline planner predicts her path too, but only once its filter
+is sure of her speed, for a walker at 1 m/s when she is nearly in the path; this gate acts
+on a second of her positions. It acts on what the detector reports, not on what it misses: a
+backstop for the planner's walker prediction (docs/closed-loop.md).
 
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
@@ -190,17 +190,18 @@ class Shield:
 
     Examples
     --------
-    >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=0, path_half_width=None))
+    >>> shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=0, path_half_width=None,
+    ...                              walker_horizon=None))
     >>> shield.update(0.7).engaged, shield.update(0.4).engaged, shield.update(0.2).engaged
     (True, True, False)
     >>> gated = Shield()  # 1 m wide in the path 12 m ahead, then beside it: the hold keeps 5 frames
     >>> ahead, beside = [[12.0, -0.5, 0.5]], [[12.0, 2.0, 3.0]]
-    >>> [gated.update(0.8, speed=8.0, unseen=u, time=0.1 * k).engaged
+    >>> [gated.update(0.8, speed=8.0, unseen=u, time=0.1 * k, walkers=[]).engaged  # no walker
     ...  for k, u in enumerate([ahead] + [beside] * 6)]
     [True, True, True, True, True, True, False]
     >>> small = Shield()  # 0.1 m wide, 10 m ahead: counts once it stood there in 2 of 3 frames
-    >>> [small.update(0.8, speed=8.0, unseen=[[10.0 - 0.8 * k, 0.0, 0.1]], time=0.1 * k).engaged
-    ...  for k in range(3)]
+    >>> [small.update(0.8, speed=8.0, unseen=[[10.0 - 0.8 * k, 0.0, 0.1]], time=0.1 * k,
+    ...               walkers=[]).engaged for k in range(3)]
     [False, True, True]
     """
 

@@ -2,8 +2,9 @@
 from __future__ import annotations
 
 #: a configuration section with the gate, no hold, no hysteresis and no confirmation: a
-#: shield without memory
-GATE_YAML = "shield: {path_half_width: 1.25, hold_frames: 0, confirm_frames: 1, confirm_window: 1, memory: null}\n"
+#: shield without memory, deciding on the risk and the unseen objects alone (no walker gate)
+GATE_YAML = ("shield: {path_half_width: 1.25, hold_frames: 0, confirm_frames: 1, confirm_window: 1, memory: null, "
+             "walker_horizon: null}\n")
 
 
 def gated_engaged(row: dict, c) -> bool:

@@ -7,8 +7,8 @@ import pytest
 from monitor.config import ShieldConfig, load_config
 from monitor.shield import Shield, consistent, describe_shield
 
-#: the paper's shield: the risk alone decides, above 0.5, no hold
-PAPER = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, path_half_width=None)
+#: the paper's shield: the risk alone decides, above 0.5, no hold (and no walker gate, which needs a path gate)
+PAPER = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, path_half_width=None, walker_horizon=None)
 
 
 def test_shield_threshold_as_in_the_paper():
@@ -18,7 +18,7 @@ def test_shield_threshold_as_in_the_paper():
 
 
 def test_shield_hysteresis_and_hold():
-    shield = Shield(ShieldConfig(threshold=0.6, release=0.3, hold_frames=1, deceleration=2.5, path_half_width=None))
+    shield = Shield(replace(PAPER, threshold=0.6, release=0.3, hold_frames=1, deceleration=2.5))
     risks = [0.7, 0.5, 0.35, 0.2, 0.2, 0.65, 0.1, 0.1]
     engaged = [shield.update(r).engaged for r in risks]
     # 0.7 engages; 0.5 and 0.35 stay engaged (above release 0.3); 0.2 releases (below 0.3,
@@ -40,7 +40,7 @@ def test_shield_from_the_configuration_section(tmp_path):
 def test_shield_treats_nan_as_danger_and_takes_numpy_numbers():
     assert Shield(PAPER).update(float("nan")).engaged
     assert Shield(PAPER).update(np.float32(0.6)).engaged and not Shield(PAPER).update(np.float64(0.4)).engaged
-    held = Shield(ShieldConfig(hold_frames=np.int64(1), path_half_width=None))
+    held = Shield(ShieldConfig(hold_frames=np.int64(1), path_half_width=None, walker_horizon=None))
     assert [held.update(r).engaged for r in (0.9, 0.1, 0.1)] == [True, True, False]
 
 
@@ -59,7 +59,8 @@ def test_shield_refuses_what_is_not_a_shield_config(config):
 # ------------------------------------------------------------------------- the path gate
 
 GATED = ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, deceleration=3.0, path_half_width=1.25, headway=0.5,
-                     margin=2.0, front=3.8, confirm_frames=1, confirm_window=1, emergency=None, memory=None)
+                     margin=2.0, front=3.8, confirm_frames=1, confirm_window=1, emergency=None, memory=None,
+                     walker_horizon=None)
 
 
 def test_reach_is_the_braking_distance_plus_headway_and_margin():
@@ -146,8 +147,8 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3, emergency=None, confirm_near=None,
-                         memory=None)  # one stage, no near zone, no memory
+                         confirm_width=0.3, emergency=None, confirm_near=None, memory=None,
+                         walker_horizon=None)  # one stage, no near zone, no memory, no walker gate
 
 
 def _run(config, frames, speed=10.0, dt=0.1):
@@ -195,7 +196,7 @@ def test_the_confirmation_width_bounds_what_must_be_confirmed():
 
 def test_without_confirmation_every_trigger_is_held():
     shield = Shield(ShieldConfig(path_half_width=1.25, hold_frames=2, confirm_frames=1, confirm_window=1,
-                                 memory=None))
+                                 memory=None, walker_horizon=None))
     frames = [np.array([[8.0, -0.1, 0.1]]), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3))]
     assert [shield.update(0.9, speed=10.0, unseen=u).engaged for u in frames] == [True, True, True, False]
 
@@ -218,15 +219,15 @@ def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
          "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
-         "remembered 1 s")
+         "remembered 1 s, walkers stepping in within 1 s")
     assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
         "within 2.5 m of the bumper, reaching under 0.3 m into the path and 50 % out of the road: all) "
         "confirmed in 2 of 3 frames")
-    assert describe_shield(ShieldConfig(emergency=None, memory=None)) == \
+    assert describe_shield(ShieldConfig(emergency=None, memory=None, walker_horizon=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
-    one = ShieldConfig(emergency=None, confirm_near=None, memory=None)
+    one = ShieldConfig(emergency=None, confirm_near=None, memory=None, walker_horizon=None)
     assert describe_shield(one) == \
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
@@ -538,6 +539,10 @@ def test_the_walker_gate_is_checked_and_named():
         ShieldConfig(walker_horizon=0.0)
     with pytest.raises(ValueError, match="walker_horizon = 1 needs a path gate"):
         ShieldConfig(walker_horizon=1, path_half_width=None)
+    # the default watches walkers: the paper's shield, without a path gate, says so
+    with pytest.raises(ValueError, match=r"walker_horizon = 1 needs a path gate \(path_half_width\), which is null: "
+                                         r"set both, or walker_horizon to null \(as the paper's shield has it\)"):
+        ShieldConfig(threshold=0.5, release=0.5, hold_frames=0, path_half_width=None)
     assert describe_shield(WATCHES).endswith("emergency 6 m/s^2, walkers stepping in within 1 s")
     with pytest.raises(ValueError, match=r"walkers = None: a shield that watches walkers \(walker_horizon = 1 s\)"):
         Shield(WATCHES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0)
