@@ -5,8 +5,12 @@ one input each. Whether a clause is positive, or at least a level ``L``, changes
 *critical points* of its input's axis:
 
 - piecewise-linear terms (trimf, trapmf, linsmf, linzmf): their vertices (where the
-  membership leaves 0 or reaches 1) and, for each level ``L`` in (0, 1), the points of their
-  sloped sides where the membership equals ``L`` (linear interpolation: exact);
+  membership leaves 0 or reaches 1) and, on each sloped side, where a weighted clause
+  reaches the threshold: the two adjacent floating-point numbers between which the test,
+  evaluated as the strength is (``w * mu >= threshold``, ``w * (1 - mu) >= threshold`` for
+  NOT), changes its answer, bisected from the side's ends (a side is linear, so the test
+  changes once): exact to the last bit, where the level's crossing computed from the
+  side's ends can lie an ulp or more from where the computed membership crosses it;
 - smooth terms: the same points found numerically: each axis is sampled at
   :data:`SAMPLES` points plus the term's own characteristic points (centres, vertices,
   centre +- k widths), and every change of a clause's truth value between two samples is
@@ -46,16 +50,42 @@ def vertices(term) -> list[tuple[float, float]]:
     return [(p[0], 1.0), (p[1], 0.0)]  # linzmf
 
 
-def _pwl_points(term, levels: np.ndarray) -> list[float]:
-    """Vertices and level crossings of a piecewise-linear term (exact)."""
+def level_tests(weights, threshold: float) -> list:
+    """The clause tests whose answers decide whether a rule of weight ``w`` (each of
+    ``weights`` > 0) reaches ``threshold`` > 0, computed as the verifier's kernel computes the
+    strength: ``w * mu >= threshold`` (a clause) and ``w * (1 - mu) >= threshold`` (a NOT
+    clause), each a function of a membership array; none for threshold 0."""
+    if threshold <= 0:
+        return []
+    tests = []
+    for w in sorted({float(w) for w in weights if w > 0}):
+        tests += [lambda m, w=w: w * m >= threshold, lambda m, w=w: w * (1.0 - m) >= threshold]
+    return tests
+
+
+def _holds(term, test, x: float) -> bool:
+    """``test``'s answer for the term's membership at ``x``."""
+    return bool(test(term.membership(np.array([x])))[0])
+
+
+def _pwl_points(term, tests) -> list[float]:
+    """Vertices of a piecewise-linear term, and on each sloped side the adjacent pair of
+    floats between which one of ``tests`` changes (exact)."""
     vs = vertices(term)
     out = [x for x, _ in vs]
     for (x0, y0), (x1, y1) in zip(vs, vs[1:]):
         if y0 == y1 or x0 == x1:
             continue
-        for level in levels:
-            if 0.0 < level < 1.0:
-                out.append(x0 + (level - y0) / (y1 - y0) * (x1 - x0))
+        for test in tests:
+            a, b, first = x0, x1, _holds(term, test, x0)
+            if _holds(term, test, x1) == first:
+                continue
+            while True:  # halves [a, b] until a and b are adjacent floats
+                m = 0.5 * (a + b)
+                if not a < m < b:
+                    break
+                a, b = (m, b) if _holds(term, test, m) == first else (a, m)
+            out += [a, b]
     return out
 
 
@@ -75,17 +105,14 @@ def _characteristic(term) -> list[float]:
     return list(p)  # smf, zmf, pimf: vertices
 
 
-def _smooth_points(term, lo: float, hi: float, levels: np.ndarray, tol: float) -> list[float]:
+def _smooth_points(term, lo: float, hi: float, tests, tol: float) -> list[float]:
     """Where a smooth term's clause truth values change on [lo, hi], bisected to ``tol``."""
     grid = np.concatenate([np.linspace(lo, hi, SAMPLES),
                            [x for x in _characteristic(term) if lo < x < hi]])
     grid = np.unique(grid)
     mu = term.membership(grid)
     out = []
-    tests = [lambda m: m > 0.0, lambda m: m < 1.0]
-    tests += [lambda m, L=L: m >= L for L in levels if 0.0 < L < 1.0]
-    tests += [lambda m, L=L: m <= 1.0 - L for L in levels if 0.0 < L < 1.0]
-    for test in tests:
+    for test in [lambda m: m > 0.0, lambda m: m < 1.0, *tests]:
         truth = test(mu)
         for j in np.flatnonzero(truth[1:] != truth[:-1]):
             a, b = grid[j], grid[j + 1]
@@ -151,19 +178,21 @@ class Axis:
         return float(lo), float(hi), bool(first % 2 == 0), bool(last % 2 == 0)
 
 
-def build_axis(var, levels: np.ndarray, tol: float) -> Axis:
-    """The :class:`Axis` of input ``var`` for clause levels ``levels`` (values in (0, 1)).
+def build_axis(var, tests, tol: float) -> Axis:
+    """The :class:`Axis` of input ``var``.
 
-    ``tol`` is the bisection tolerance for smooth terms, as a fraction of the range.
+    ``tests`` are the clause tests whose answers cut the axis besides ``mu > 0`` and
+    ``mu < 1`` (:func:`level_tests`); ``tol`` is the bisection tolerance for smooth terms, as
+    a fraction of the range.
     """
     lo, hi = var.range
     found = [lo, hi]
     exact = True
     for term in var.terms:
         if term.kind in PIECEWISE_LINEAR:
-            found += _pwl_points(term, levels)
+            found += _pwl_points(term, tests)
         else:
             exact = False
-            found += _smooth_points(term, lo, hi, levels, tol * (hi - lo))
+            found += _smooth_points(term, lo, hi, tests, tol * (hi - lo))
     points = np.unique(np.array([x for x in found if lo <= x <= hi and math.isfinite(x)], dtype=np.float64))
     return Axis(var.name, lo, hi, points, exact)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._kernels import strongest_per_cell
-from .cells import Axis, build_axis
+from .cells import Axis, build_axis, level_tests
 
 #: uniform cuts per axis when a threshold meets prod/probor (coverage is then sampled)
 SUBDIVISIONS = 64
@@ -79,10 +79,8 @@ def decompose(fis, threshold: float, tol: float, max_cells: int) -> Cells:
         Refuse (``ValueError``) a decomposition with more cells.
     """
     weights = np.array([r.weight for r in fis.rules])
-    levels = {threshold / w for w in weights if w > 0 and threshold / w <= 1.0} if threshold > 0 else set()
-    levels |= {1.0 - L for L in levels}
-    levels = np.array(sorted(L for L in levels if 0.0 < L < 1.0))
-    axes = [build_axis(var, levels, tol) for var in fis.inputs]
+    tests = level_tests(weights, threshold)
+    axes = [build_axis(var, tests, tol) for var in fis.inputs]
     exact_levels = threshold == 0 or (fis.and_method == "min" and fis.or_method == "max")
     if not exact_levels:
         axes = [Axis(a.name, a.lo, a.hi, np.unique(np.concatenate([a.points, np.linspace(a.lo, a.hi,

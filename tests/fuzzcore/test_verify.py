@@ -130,6 +130,26 @@ def test_piecewise_linear_coverage_agrees_with_a_dense_grid(fis, threshold):
     assert c.uncovered_share == pytest.approx(share, abs=2 * n_breaks / n)
 
 
+
+def test_a_level_crossing_is_placed_where_the_computed_membership_crosses_it():
+    # 1 - x / 1.1875 reaches 0.3 at x = 0.7 * 1.1875 = 0.83125, where the computed membership is
+    # 0.3 exactly (covered at 0.3) and one float above it 0.2999999999999999; the level's
+    # crossing computed from the side's ends is 0.8312499999999999, an ulp below. Every float
+    # near it is claimed uncovered exactly when the reference says the rule falls short
+    x = Variable("x", (0.0, 1.1875), (Term("down", "trimf", (0.0, 0.0, 1.1875)),))
+    z = Variable("z", (0.0, 1.0), (Term("low", "trimf", (0.0, 0.0, 1.0)),))
+    fis = FuzzySystem("edge", (x,), (z,), (Rule((1,), (1,)),))
+    c = fuzzcore.verify(fis, threshold=0.3).coverage
+    assert c.exact
+    near = [0.83125]
+    for _ in range(4):
+        near = [np.nextafter(near[0], 0.0), *near, np.nextafter(near[-1], 2.0)]
+    X = np.array(near)[:, None]
+    claimed = np.zeros(X.shape[0], dtype=bool)
+    for region in c.regions:
+        claimed |= _inside(region, X, fis.input_names)
+    assert claimed.tolist() == (~(_brute_strongest(fis, X) >= 0.3)).tolist() == [False] * 5 + [True] * 4
+
 # --------------------------------------------------------------------------- monotonicity
 def test_a_known_non_monotone_pair_is_found():
     # z is high where x is low and low where x is high: decreasing in x, declared increasing
