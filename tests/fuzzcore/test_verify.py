@@ -130,7 +130,6 @@ def test_piecewise_linear_coverage_agrees_with_a_dense_grid(fis, threshold):
     assert c.uncovered_share == pytest.approx(share, abs=2 * n_breaks / n)
 
 
-
 def test_a_level_crossing_is_placed_where_the_computed_membership_crosses_it():
     # 1 - x / 1.1875 reaches 0.3 at x = 0.7 * 1.1875 = 0.83125, where the computed membership is
     # 0.3 exactly (covered at 0.3) and one float above it 0.2999999999999999; the level's
@@ -149,6 +148,7 @@ def test_a_level_crossing_is_placed_where_the_computed_membership_crosses_it():
     for region in c.regions:
         claimed |= _inside(region, X, fis.input_names)
     assert claimed.tolist() == (~(_brute_strongest(fis, X) >= 0.3)).tolist() == [False] * 5 + [True] * 4
+
 
 # --------------------------------------------------------------------------- monotonicity
 def test_a_known_non_monotone_pair_is_found():
