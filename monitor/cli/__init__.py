@@ -24,6 +24,8 @@ COMMANDS = {
                  "export per-frame features (iou, rdd) and targets (1 - USC~) of scenes as CSV"),
     "simulate": ("monitor.cli.simulate",
                  "closed loop with traffic: collisions avoided and false braking of the monitor's shield"),
+    "compare": ("monitor.cli.compare", "two simulate runs of the same scenarios, scenario by scenario: "
+                                       "the collisions and false braking a change to the shield moved"),
     "prior": ("monitor.cli.prior",
               "build the inverse-depth prior (mean 1/D of training frames) used by the retrieval"),
     "convert": ("monitor.cli.convert",

@@ -41,6 +41,14 @@ def test_simulate_smoke(tmp_path, capsys):
     assert "| cut-in | nominal | 1 |" in summary and "| cut-in | all | 2 |" in summary
     assert runs[0]["hazard"]["class"] == "car" and len(runs[0]["hazard"]["size"]) == 3
     assert "| car | 2 |" in summary  # the cut-in car, by what the hazard is
+    # fuzzrisk compare of the run with itself: nothing moved, and its counts are the summary's
+    cut_in = json.loads((out / "summary.json").read_text())["by_kind"]["cut-in"]
+    m = cut_in["avoidable_collisions"]
+    n = round((cut_in["avoidance_rate_avoidable"] or 0.0) * m)
+    capsys.readouterr()
+    assert main(["compare", str(out), str(out / "runs.jsonl")]) == 0
+    assert f"| cut-in | 2 | avoided {n} of {m} avoidable | avoided {n} of {m} avoidable | 0 |" in \
+        capsys.readouterr().out
     # the outputs are there: a second run refuses to replace them, then does with --overwrite
     capsys.readouterr()
     assert main(args) == 2
