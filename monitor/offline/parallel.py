@@ -9,7 +9,7 @@ output serially, on ``workers`` processes or on Ray.
 - ``workers == 1`` and no Ray: everything in this process;
 - ``workers > 1``: a ``spawn`` process pool, each worker building the function once; at
   most ``2 * workers`` items are in flight, so a long list of items is never all pickled
-  and queued at once;
+  and queued at once; on an error the items in flight finish before the error is raised;
 - ``ray``: ``"auto"`` (a running cluster, or a local one) or a cluster address; the items
   go through Ray Data's ``map_batches`` with a callable class on an actor pool
   (:mod:`monitor.offline.ray_backend`; Ray is an optional extra: ``pip install -e ".[ray]"``).
@@ -75,8 +75,8 @@ def ordered_map(spec, items: Iterable, *, workers: int = 1, ray: str | None = No
         for item in items:
             yield fn(item)
         return
-    context = multiprocessing.get_context("spawn")
-    with context.Pool(workers, initializer=_init_worker, initargs=(spec,)) as pool:
+    pool = multiprocessing.get_context("spawn").Pool(workers, initializer=_init_worker, initargs=(spec,))
+    try:
         pending: deque = deque()
         for item in items:
             pending.append(pool.apply_async(_call_worker, (item,)))
@@ -84,3 +84,15 @@ def ordered_map(spec, items: Iterable, *, workers: int = 1, ray: str | None = No
                 yield pending.popleft().get()
         while pending:
             yield pending.popleft().get()
+    except BaseException as exc:
+        if not isinstance(exc, (Exception, GeneratorExit)):  # Ctrl-C: the workers stop now
+            pool.terminate()
+        raise
+    finally:
+        # An error (or a consumer that stops early) closes the pool and lets the tasks in
+        # flight (at most 2 * workers) finish. Pool.terminate() kills the workers, and one
+        # killed while it puts a result on the shared result queue holds the queue's lock for
+        # good: the pool's task handler then waits on it forever (CPython issue #96995; it
+        # hung this way once in the test suite).
+        pool.close()
+        pool.join()

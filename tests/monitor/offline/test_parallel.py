@@ -30,6 +30,20 @@ def test_a_worker_that_cannot_start_raises_its_error_once():
         list(ordered_map(Broken(), [1, 2, 3], workers=2))
 
 
+def test_an_error_or_an_early_stop_ends_the_pool_without_terminating_it(monkeypatch):
+    """Pool.terminate() may kill a worker while it holds the result queue's lock, and the pool
+    then waits forever (CPython issue #96995): the pool is closed and joined instead."""
+    import multiprocessing.pool
+    terminated = []
+    monkeypatch.setattr(multiprocessing.pool.Pool, "terminate", lambda pool: terminated.append(pool))
+    with pytest.raises(ValueError, match="model.onnx: cannot be loaded"):
+        list(ordered_map(Broken(), range(10), workers=2))
+    squares = ordered_map(Square(), range(100), workers=2)
+    assert [next(squares) for _ in range(3)] == [0, 1, 4]
+    squares.close()  # a consumer that stops early
+    assert terminated == []
+
+
 @pytest.mark.parametrize("workers", [0, -1, 1.5, True])
 def test_workers_must_be_a_positive_count(workers):
     with pytest.raises(ValueError, match=f"--workers {workers!r}: expected an integer >= 1"):
