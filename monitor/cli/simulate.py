@@ -26,11 +26,14 @@ import json
 import math
 import sys
 import time
+from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from tqdm import tqdm
 
 from fuzzcore.outputs import check_output_folder, write_text
+from monitor.offline.parallel import ordered_map
 
 SWEEP_THRESHOLDS = (0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 #: (threshold - release, hold_frames) of the sweep's hysteresis settings
@@ -90,23 +93,31 @@ def sweep_settings(default):
             for t in SWEEP_THRESHOLDS for gap, hold in SWEEP_HYSTERESIS]
 
 
-# one monitor per process, built by _init (or in-process for a serial run)
-_STATE: dict = {}
+@dataclass(frozen=True, eq=False)
+class Driver:
+    """What every process needs to drive jobs (:func:`monitor.offline.parallel.ordered_map`'s
+    spec): the rule base and config paths, the inverse-depth prior (H, W), the
+    :class:`~monitor.geometry.camera.Camera` and the depth errors switched off. ``build()``
+    makes the monitor once per process and gives the function that drives one job."""
+
+    rules: str | Path
+    config_path: str | Path | None
+    prior: object
+    camera: object
+    depth_off: tuple = ()
+
+    def build(self):
+        import fuzzcore
+        from monitor.config import load_config
+        from monitor.offline.closed_loop import Perception
+        from monitor.risk_monitor import RiskMonitor
+
+        monitor = RiskMonitor(fuzzcore.load(self.rules), self.prior, self.camera, load_config(self.config_path),
+                              explain=False)
+        return partial(_drive, Perception(self.camera), monitor, tuple(self.depth_off))
 
 
-def _init(rules, config_path, prior, camera, depth_off) -> None:
-    import fuzzcore
-    from monitor.config import load_config
-    from monitor.offline.closed_loop import Perception
-    from monitor.risk_monitor import RiskMonitor
-
-    config = load_config(config_path)
-    _STATE["monitor"] = RiskMonitor(fuzzcore.load(rules), prior, camera, config, explain=False)
-    _STATE["perception"] = Perception(camera)
-    _STATE["depth_off"] = tuple(depth_off)
-
-
-def _drive(job):
+def _drive(perception, monitor, off, job):
     """The runs of one ``(spec, shields)`` job: the baseline's, one per shield and, for a hazard,
     the first shield's switched on at the hazard's onset."""
     from monitor.offline.closed_loop import run_scenario
@@ -114,9 +125,8 @@ def _drive(job):
     from monitor.synthetic import get_condition, without_depth_errors
 
     spec, shields = job
-    off = _STATE["depth_off"]
     condition = without_depth_errors(get_condition(spec.condition), off) if off else None
-    return run_scenario(spec, _STATE["perception"], _STATE["monitor"], shields, condition=condition,
+    return run_scenario(spec, perception, monitor, shields, condition=condition,
                         from_onset=spec.kind in HAZARD_KINDS)
 
 
@@ -125,21 +135,10 @@ def drive_all(jobs, rules, config_path, prior, camera, workers: int, progress=No
     ``depth_off``: parts of the depth network's error switched off in every job
     (:func:`~monitor.synthetic.without_depth_errors`)."""
     results = []
-    if workers == 1:
-        _init(rules, config_path, prior, camera, depth_off)
-        for job in jobs:
-            results.append(_drive(job))
-            if progress is not None:
-                progress()
-        return results
-    import multiprocessing
-
-    ctx = multiprocessing.get_context("spawn")  # no forked OpenCV/Numba threads
-    with ctx.Pool(workers, initializer=_init, initargs=(rules, config_path, prior, camera, depth_off)) as pool:
-        for result in pool.imap(_drive, jobs, chunksize=1):
-            results.append(result)
-            if progress is not None:
-                progress()
+    for result in ordered_map(Driver(rules, config_path, prior, camera, tuple(depth_off)), jobs, workers=workers):
+        results.append(result)
+        if progress is not None:
+            progress()
     return results
 
 

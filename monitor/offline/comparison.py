@@ -17,10 +17,10 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from monitor.offline.closed_loop import BASELINE, FROM_ONSET
+
 #: the fields of a ``runs.jsonl`` line (:meth:`monitor.offline.closed_loop.Run.to_dict`) read here
 FIELDS = ("kind", "seed", "condition", "driver", "outcome", "frames", "engaged_frames", "onset")
-#: the label suffix of the shield switched on at the hazard's onset (``fuzzrisk simulate``)
-FROM_ONSET = " from onset"
 
 
 @dataclass(frozen=True)
@@ -115,7 +115,7 @@ def load_runs(path: str | Path) -> list[dict]:
 
 def _by_scenario(runs: list[dict], name: str) -> tuple[str, dict, dict]:
     """The shield's label, and the baseline's and the shield's run per (kind, seed)."""
-    labels = sorted({r["driver"] for r in runs} - {"baseline"})
+    labels = sorted({r["driver"] for r in runs} - {BASELINE})
     shields = [d for d in labels if not d.endswith(FROM_ONSET)]
     if len(shields) != 1:
         raise ValueError(f"{name} has the shield drivers {shields}; expected one, as fuzzrisk simulate "
@@ -123,7 +123,7 @@ def _by_scenario(runs: list[dict], name: str) -> tuple[str, dict, dict]:
     baseline, shield = {}, {}
     for run in runs:
         key = (run["kind"], run["seed"])
-        table = baseline if run["driver"] == "baseline" else shield if run["driver"] == shields[0] else None
+        table = baseline if run["driver"] == BASELINE else shield if run["driver"] == shields[0] else None
         if table is None:
             continue
         if key in table:
