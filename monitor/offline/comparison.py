@@ -37,8 +37,8 @@ class Change:
     baseline : str
         The baseline's outcome (the same in both runs).
     avoidable : bool
-        A hazard the baseline hit with a gap at its onset that the shield's deceleration
-        could close (``Run.onset["avoidable"]``); False for a hazard-free drive.
+        A hazard the baseline hit, with a gap at its onset in which the shield's deceleration
+        could still stop the car (``Run.onset["avoidable"]``); False for a hazard-free drive.
     """
 
     kind: str
