@@ -114,7 +114,7 @@ class Driver:
 
         monitor = RiskMonitor(fuzzcore.load(self.rules), self.prior, self.camera, load_config(self.config_path),
                               explain=False)
-        return partial(_drive, Perception(self.camera), monitor, tuple(self.depth_off))
+        return partial(_drive, Perception(self.camera), monitor, self.depth_off)
 
 
 def _drive(perception, monitor, off, job):
