@@ -246,6 +246,16 @@ class ShieldConfig:
         comes out of the road. None: not asked. Needs the geometric view
         (``retrieval.method: geometric``); the monitor keeps each frame's blocks for it
         only when it is set.
+    confirm_contact : float in [0, 1] or None
+        With a path gate that confirms: an unseen object that stands on the road (or on
+        something in front of it) in fewer than this share of its columns
+        (:attr:`monitor.RiskReport.unseen_contact`, the geometric view's rule 5) counts only
+        once confirmed, wherever it stands, and a sighting that floats confirms only one that
+        floats (one that stands, or cannot tell, only one that stands or cannot tell). What
+        stands on the road meets it along its width; a blob of the depth read too near in one
+        frame floats, and is no evidence that the patch read too near at the image's bottom
+        edge in the next frame stands there. The paper's view does not measure it (NaN), and
+        what is not measured does not float. None: not asked.
     memory : float > 0 or None
         With a path gate, seconds the shield remembers where the unseen objects that engaged
         it stand (on the road, the ego's travel allowed for). An unseen object seen where a
@@ -278,6 +288,7 @@ class ShieldConfig:
     confirm_near: float | None = 2.5
     confirm_edge: float | None = None
     confirm_emerged: float | None = None
+    confirm_contact: float | None = None
     memory: float | None = 1.0
     walker_horizon: float | None = 1.0
 
@@ -312,8 +323,9 @@ class ShieldConfig:
                 if not (math.isfinite(value) and value >= 0):
                     raise ValueError(f"{name} = {getattr(self, name)!r}, must be >= 0 metres (or null: {null})")
                 _set(self, name, value)
-        if self.confirm_emerged is not None:
-            _set(self, "confirm_emerged", _unit(self.confirm_emerged, "confirm_emerged"))
+        for name in ("confirm_emerged", "confirm_contact"):
+            if getattr(self, name) is not None:
+                _set(self, name, _unit(getattr(self, name), name))
         for name, unit in (("headway", "seconds"), ("margin", "metres"), ("front", "metres")):
             value = _number(getattr(self, name), name)
             if not (math.isfinite(value) and value >= 0):

@@ -118,6 +118,12 @@ class RiskReport:
         :meth:`~monitor.geometry.camera.Camera.ground_extents`); (0, 3) when the view found
         nothing; None for frames without a view (``invalid-input``, ``no-view``). The
         path-gated shield reads it (:class:`monitor.shield.Shield`).
+    unseen_contact : ndarray of shape (k,), float64, or None
+        Per unseen object (rows as ``unseen``), the share of its columns in which it stands
+        on the road or on something in front of it (the geometric view's
+        :attr:`~monitor.depth.geometric.GeometricView.contact`); NaN where not measured (no
+        valid depth beneath it, and every object of the paper's view); None with ``unseen``.
+        The shield reads it (``shield.confirm_contact``).
     unseen_points : tuple of ndarray of shape (n_i, 3)
         Per unseen object (rows as ``unseen``), its blocks in the ego frame
         (:attr:`monitor.depth.geometric.GeometricView.points`); empty for the paper's view,
@@ -146,6 +152,7 @@ class RiskReport:
     fired: list = field(default_factory=list)
     free_distance: float = float("nan")
     unseen: np.ndarray | None = None
+    unseen_contact: np.ndarray | None = None
     unseen_points: tuple = ()
     road_depth: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
@@ -163,6 +170,8 @@ class RiskReport:
             "fired": [{"rule": r + 1, "text": t, "strength": s} for r, t, s in self.fired],
             "free_distance": _json_distance(self.free_distance),
             "unseen": None if self.unseen is None else self.unseen.tolist(),
+            "unseen_contact": None if self.unseen_contact is None else
+            [None if np.isnan(c) else c for c in self.unseen_contact.tolist()],
             "timings_ms": {k: 1e3 * v for k, v in self.timings.items()},
         }
 
@@ -175,13 +184,15 @@ def _json_distance(value: float) -> float | str | None:
 class _DepthView(NamedTuple):
     """What :meth:`RiskMonitor._depth_view` saw: S (m, 5); where each stands in the ego
     frame (m, 3) ``x, y_min, y_max`` (the geometric view measures it from its points, the
-    paper's is back-projected from the box); the free distance ahead (NaN for the paper's
-    view); why the view cannot see through the frame ("" when it can); each S's blocks in the
-    ego frame and the road it saw per block (the geometric view's rule 9; empty and None for
-    the paper's)."""
+    paper's is back-projected from the box); how much of each stands on something (m,)
+    (the geometric view's contact, NaN for the paper's); the free distance ahead (NaN for
+    the paper's view); why the view cannot see through the frame ("" when it can); each S's
+    blocks in the ego frame and the road it saw per block (the geometric view's rule 9;
+    empty and None for the paper's)."""
 
     S: np.ndarray
     extents: np.ndarray
+    contact: np.ndarray
     free: float
     blind: str
     points: tuple
@@ -284,12 +295,13 @@ class RiskMonitor:
             try:
                 view = self._retriever.view(depth)
             except BlindViewError as exc:
-                return _DepthView(np.zeros((0, 5)), np.zeros((0, 3)), float("nan"), str(exc), (), None)
-            return _DepthView(view.boxes, view.extents, view.free_distance, check_view(depth, self._visibility),
-                              view.points, view.road_depth)
+                return _DepthView(np.zeros((0, 5)), np.zeros((0, 3)), np.zeros(0), float("nan"), str(exc),
+                                  (), None)
+            return _DepthView(view.boxes, view.extents, view.contact, view.free_distance,
+                              check_view(depth, self._visibility), view.points, view.road_depth)
         S = self._retriever(depth)
-        return _DepthView(S, self.camera.ground_extents(S), float("nan"), check_view(depth, self._visibility),
-                          (), None)
+        return _DepthView(S, self.camera.ground_extents(S), np.full(len(S), np.nan), float("nan"),
+                          check_view(depth, self._visibility), (), None)
 
     def emerged(self, report: RiskReport, earlier) -> np.ndarray | None:
         """Per unseen object of ``report``, the smallest share of its blocks behind whose
@@ -414,7 +426,7 @@ class RiskMonitor:
         chosen = self.config.alignment
         alignment = align(S, P, chosen.alpha, chosen.beta, chosen.weighting, chosen.matching,
                           chosen.objects, self.config.max_range)
-        unseen = seen.extents[~alignment.matched]
+        unseen, unseen_contact = seen.extents[~alignment.matched], seen.contact[~alignment.matched]
         unseen_points = tuple(p for p, m in zip(seen.points, alignment.matched) if not m)
         t3 = time.perf_counter()
         timings["alignment"] = t3 - t2
@@ -422,7 +434,8 @@ class RiskMonitor:
             return RiskReport(risk=self.config.risk.no_view, status=NO_VIEW, reason=seen.blind,
                               S=S, P=P, alignment=alignment, timings=timings)
         free = seen.free
-        view = {"unseen": unseen, "unseen_points": unseen_points, "road_depth": seen.road_depth}
+        view = {"unseen": unseen, "unseen_contact": unseen_contact, "unseen_points": unseen_points,
+                "road_depth": seen.road_depth}
         if alignment.n_terms == 0:
             free_note = "" if np.isnan(free) else " (the corridor is free to its end)"
             detected = " and no detection" if alignment.objects == "known" else ""

@@ -71,6 +71,18 @@ saw the road farther on. Such a patch, wide and within the emergency reach, is w
 at-once rule brakes hardest for; an obstacle that the network blended into the road in
 both frames before is confirmed when it is seen again.
 
+With ``confirm_contact`` an object that touches nothing must be confirmed too, wherever it
+stands: one that stands on the road, or on something in front of it, in fewer than that
+share of its columns (``contact``, :attr:`monitor.RiskReport.unseen_contact`). What stands
+on the road meets it along its width (a walker at her feet, a car at its wheels and
+bumper, debris all along); a blob of the depth read too near in one frame hangs in the air,
+the road beneath it seen farther. The view keeps an upright object that touches nothing (the
+raised rear of a trailer, a barrier's arm), and such a thing stands there in the next
+frame too; the blob does not. A sighting that floats then confirms only one that floats,
+and one that stands (or cannot tell: nothing valid beneath it) only one that stands: two
+blobs in two frames are not one object, and neither is a blob in one frame and a patch read
+too near at the image's bottom edge in the next.
+
 With ``memory`` the gate remembers where the unseen objects that engaged it stand, on the
 road (the ego's travel, integrated from its speed, taken off their distance), for
 ``memory`` seconds after each was last sighted. An unseen object seen where a remembered one
@@ -165,7 +177,9 @@ def describe_shield(config: ShieldConfig) -> str:
             zones = ([] if config.emergency is None else ["beyond the emergency reach"]) + \
                 ([] if config.confirm_near is None else [f"within {config.confirm_near:g} m of the bumper"]) + \
                 ([] if config.confirm_edge is None else [f"reaching under {config.confirm_edge:g} m into the path"]) + \
-                ([] if config.confirm_emerged is None else [f"{100 * config.confirm_emerged:g} % out of the road"])
+                ([] if config.confirm_emerged is None else [f"{100 * config.confirm_emerged:g} % out of the road"]) + \
+                ([] if config.confirm_contact is None else
+                 [f"touching the road in under {100 * config.confirm_contact:g} % of their columns"])
             if zones:
                 listed = zones[0] if len(zones) == 1 else f"{', '.join(zones[:-1])} and {zones[-1]}"
                 which += f" ({listed}: all)"
@@ -218,7 +232,8 @@ class Shield:
         self.engaged = False
         self._since_trigger = 0
         self._decel = self.config.deceleration  # requested while engaged: the last trigger's
-        self._history = deque(maxlen=self.config.confirm_window - 1)  # (time, unseen) of past frames
+        # (time, unseen, which of them float) of past frames
+        self._history = deque(maxlen=self.config.confirm_window - 1)
         self._odometer = 0.0  # metres the ego travelled (speed times the frames' intervals)
         self._time = None  # the last frame's time
         # remembered objects: x, y_min, y_max where last sighted, its time, the odometer then,
@@ -236,7 +251,7 @@ class Shield:
         return speed * speed / (2.0 * decel) + speed * c.headway + c.margin
 
     def update(self, risk: float, speed: float | None = None, unseen=None,
-               time: float | None = None, emerged=None, walkers=None) -> ShieldDecision:
+               time: float | None = None, emerged=None, walkers=None, contact=None) -> ShieldDecision:
         """The decision for the next frame.
 
         Parameters
@@ -261,6 +276,11 @@ class Shield:
             ``x, y`` (ego frame, metres) of the walkers the detector reports in the frame
             (:func:`monitor.walkers.walker_positions`); needed with ``walker_horizon``,
             which refuses None, and read only then.
+        contact : ndarray of shape (k,), optional
+            The report's :attr:`~monitor.RiskReport.unseen_contact`: one share in [0, 1] (or
+            NaN: not measured) per row of ``unseen``; None: not given, which a path gate that
+            confirms with ``confirm_contact`` refuses for a frame with a view. Read only by
+            such a gate.
         """
         if isinstance(risk, bool) or not isinstance(risk, numbers.Real):
             raise ValueError(f"risk = {risk!r}, expected a number (a risk in [0, 1], or NaN)")
@@ -268,7 +288,7 @@ class Shield:
         c = self.config
         decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
-            decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged)
+            decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged, contact)
         walker, stepping = (0.0, ()) if c.walker_horizon is None else self._walker(float(speed), walkers)
         cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
@@ -293,18 +313,20 @@ class Shield:
             counted = ()
         return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk, cause, counted)
 
-    def _in_path(self, speed, unseen, time, triggers: bool, emerged) -> tuple[float, float, str, tuple]:
+    def _in_path(self, speed, unseen, time, triggers: bool, emerged,
+                 contact) -> tuple[float, float, str, tuple]:
         """The deceleration an unseen object in the path within reach calls for, m/s^2:
         ``emergency`` for one within the emergency reach, ``deceleration`` for one beyond
         it or for a frame without a view to tell, 0.0 for none. One narrower than
         ``confirm_width``, with ``emergency`` one beyond the emergency reach, one within
         ``confirm_near`` of the bumper, one reaching less than ``confirm_edge`` into the
-        path, and one whose ``emerged`` share reaches ``confirm_emerged``, count only once
-        confirmed. Second, with a memory, the deceleration the remembered objects call for
-        where they stand now (0.0 without); the counting objects of a frame that
-        ``triggers`` (its risk above the threshold) are remembered. Third and fourth, why
-        the first would engage the shield (``no view``, ``at once``, ``confirmed``; "" for
-        nothing) and the objects that count, as :class:`ShieldDecision` gives them."""
+        path, one whose ``emerged`` share reaches ``confirm_emerged``, and one whose
+        ``contact`` is under ``confirm_contact``, count only once confirmed. Second, with a
+        memory, the deceleration the remembered objects call for where they stand now (0.0
+        without); the counting objects of a frame that ``triggers`` (its risk above the
+        threshold) are remembered. Third and fourth, why the first would engage the shield
+        (``no view``, ``at once``, ``confirmed``; "" for nothing) and the objects that count,
+        as :class:`ShieldDecision` gives them."""
         c = self.config
         if isinstance(speed, bool) or not isinstance(speed, numbers.Real) or not speed >= 0 \
                 or not math.isfinite(speed):
@@ -319,12 +341,11 @@ class Shield:
             raise ValueError(f"emerged = None: a shield that confirms what came out of the road (confirm_emerged "
                              f"= {c.confirm_emerged:g}) needs a share per unseen object, RiskMonitor.emerged "
                              "of a monitor whose config sets shield.confirm_emerged too")
-        if emerged is not None:
-            emerged = np.asarray(emerged, dtype=np.float64)
-            k = None if unseen is None else unseen.shape[0]
-            if emerged.shape != (k,) or np.any(np.abs(emerged - 0.5) > 0.5):
-                raise ValueError(f"emerged = {emerged.tolist()}: expected one share in [0, 1] (or NaN) per "
-                                 f"row of unseen, shape ({k},) (RiskMonitor.emerged)")
+        if contact is None and unseen is not None and c.confirm_contact is not None and c.confirm_frames > 1:
+            raise ValueError(f"contact = None: a shield that confirms what touches nothing (confirm_contact = "
+                             f"{c.confirm_contact:g}) needs a share per unseen object, RiskReport.unseen_contact")
+        emerged = _shares(emerged, unseen, "emerged", "RiskMonitor.emerged")
+        contact = _shares(contact, unseen, "contact", "RiskReport.unseen_contact")
         if c.confirm_frames > 1 or c.memory is not None or c.walker_horizon is not None:
             if isinstance(time, bool) or not isinstance(time, numbers.Real) or not math.isfinite(time) \
                     or (self._time is not None and not time > self._time):
@@ -339,6 +360,9 @@ class Shield:
         if c.memory is not None:  # forget what was not sighted for too long
             self._memory = self._memory[time - self._memory[:, 3] <= c.memory]
         why, counted = "", ()
+        floats = np.zeros(0 if unseen is None else unseen.shape[0], dtype=bool)
+        if c.confirm_contact is not None and contact is not None:
+            floats = contact < c.confirm_contact  # NaN: not measured, does not float
         if unseen is None:
             decel, why = c.deceleration, "no view"
         else:
@@ -361,11 +385,15 @@ class Shield:
                     asked |= np.minimum(near[:, 2], w) - np.maximum(near[:, 1], -w) < c.confirm_edge
                 if c.confirm_emerged is not None:
                     asked |= emerged[inside] >= c.confirm_emerged  # NaN: not known, not asked
+                asked |= floats[inside]
             unconfirmed = asked.copy()
             if unconfirmed.any():
                 hits = np.zeros(near.shape[0], dtype=np.int64)
-                for t, then in self._history:
-                    hits += consistent(near, then, time - t, speed)
+                afloat = floats[inside]
+                for t, then, then_afloat in self._history:  # a sighting that floats confirms one that
+                    dt = time - t                             # floats, one that stands one that stands
+                    hits[afloat] += consistent(near[afloat], then[then_afloat], dt, speed)
+                    hits[~afloat] += consistent(near[~afloat], then[~then_afloat], dt, speed)
                 unconfirmed &= hits < c.confirm_frames - 1
             counts = ~unconfirmed
             if c.memory is not None:
@@ -377,7 +405,7 @@ class Shield:
                 why = "at once" if np.any(counts & ~asked) else "confirmed"
                 counted = tuple(tuple(row) for row in near[counts].tolist())
         if c.confirm_frames > 1:
-            self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen))
+            self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen, floats))
         return decel, (0.0 if c.memory is None else self._remembered(float(speed))), why, counted
 
     def _walker(self, speed: float, walkers) -> tuple[float, tuple]:
@@ -444,6 +472,20 @@ MATCH_LATERAL_M = 0.3
 MATCH_REL = 0.15
 #: Speed of an object's own motion ``consistent`` allows, m/s (a person walking briskly).
 OBJECT_SPEED = 2.0
+
+
+def _shares(values, unseen: np.ndarray | None, name: str, source: str) -> np.ndarray | None:
+    """``values`` (``emerged`` or ``contact``) as (k,) float64, one share in [0, 1] or NaN per
+    row of ``unseen`` (k, 3); None stays None. ValueError naming ``name`` and its ``source``
+    otherwise (values given for a frame without a view among them)."""
+    if values is None:
+        return None
+    values = np.asarray(values, dtype=np.float64)
+    k = None if unseen is None else unseen.shape[0]
+    if values.shape != (k,) or np.any(np.abs(values - 0.5) > 0.5):
+        raise ValueError(f"{name} = {values.tolist()}: expected one share in [0, 1] (or NaN) per "
+                         f"row of unseen, shape ({k},) ({source})")
+    return values
 
 
 def consistent(now: np.ndarray, then: np.ndarray, dt: float, speed: float) -> np.ndarray:

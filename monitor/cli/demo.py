@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
                                        config.detections.min_score)
             decision = shield.update(ob.report.risk, speed=frame.ego_speed, unseen=ob.report.unseen,
                                      time=frame.timestamp, emerged=monitor.emerged(ob.report, before),
-                                     walkers=walkers)
+                                     walkers=walkers, contact=ob.report.unseen_contact)
             obs_by_condition.setdefault(scene.condition, []).append(ob)
             split.append((scene.split, ob))
             target = ob.target if np.isfinite(ob.target) else None

@@ -62,7 +62,11 @@ in the manner of the stereo-vision obstacle detectors:
    it, or the depth below is invalid) contact cannot be told: such an object is dropped
    when its inverse depth grows more than ``UNSUPPORTED_INCLINE`` times as fast as the
    road's, faster than the top of any low obstacle; an upright face (near 0) or the top of
-   debris is kept.
+   debris is kept. Each object's contact is reported (:attr:`GeometricView.contact`): an
+   upright face that touches nothing is kept, as the raised rear of a trailer or a barrier's
+   arm must be, but a blob of the depth read too near in one frame, too few rows tall for
+   its incline to show, floats the same way, and the shield asks such an object to stand
+   in more than one frame before it brakes for it (``ShieldConfig.confirm_contact``).
 6. **What hides nothing is no object.** What stands on the road hides what is behind it:
    right above its top the image sees the road far beyond it, the sky, or something
    standing behind it. A patch of road that the depth reads a little too near over a wide
@@ -415,6 +419,12 @@ class GeometricView:
         ``100 - depth_percentile`` percentile of its blocks' ego y (as robust to stray blocks
         as its depth), metres; rows as ``boxes``. With ``min_rise``, from its blocks that
         rise where it has any (the module's rule 8).
+    contact : ndarray of shape (m,), float64
+        Per object (rows as ``boxes``), the share in [0, 1] of its columns in which it stands
+        on the road or on something in front of it: the first valid blocks beneath its lowest
+        block no farther than ``CONTACT_RATIO`` times its depth (rule 5). NaN where no column
+        has a valid block beneath it (the image's bottom edge cuts it, or the depth below is
+        invalid).
     free_distance : float
         Ego x (metres, from the ego origin) of the nearest obstacle block of an object
         inside the corridor; inf when no object is there within ``max_range``.
@@ -446,6 +456,7 @@ class GeometricView:
 
     boxes: np.ndarray
     extents: np.ndarray
+    contact: np.ndarray
     free_distance: float
     ground: np.ndarray
     ground_fitted: bool
@@ -643,8 +654,10 @@ class GeometricRetriever:
                                         int(stats[keep, 0].min()), int(stats[keep, 1].max()))
             extents[keep] = standing[:, :3]
             flat[keep] = standing[:, 3] == 0
+        contact = np.full(keep.size, np.nan)
         if keep.any():
-            keep[keep] = ~self._no_object(scratch.labels, keep, scratch.points, ground, flat[keep])
+            dropped, contact[keep] = self._no_object(scratch.labels, keep, scratch.points, ground, flat[keep])
+            keep[keep] = ~dropped
         order = np.argsort(boxes[keep, 4], kind="stable")
         points, road_depth = (), None
         if self.keep_blocks:
@@ -657,6 +670,7 @@ class GeometricRetriever:
         return GeometricView(
             boxes=boxes[keep][order],
             extents=extents[keep][order],
+            contact=contact[keep][order],
             free_distance=float(stats[keep, 6].min()) if keep.any() else math.inf,
             ground=np.array(ground, dtype=np.float64),
             ground_fitted=support > 0,
@@ -732,11 +746,13 @@ class GeometricRetriever:
             out[narrow] = (top < p.ledge_height) & (along > LEDGE_ELONGATION * across[narrow])
         return out
 
-    def _no_object(self, labels, keep, points, ground, flat) -> np.ndarray:
+    def _no_object(self, labels, keep, points, ground, flat) -> tuple[np.ndarray, np.ndarray]:
         """Which of the kept components (``keep``, bool (n,)) are no objects: those that
         float (rule 5: ``max_incline``, ``min_contact``) or hide nothing (rule 6:
         ``min_occlusion``; ``flat``, bool (kept,), the components none of whose blocks
-        rises, must hide by their depth). bool (kept,).
+        rises, must hide by their depth), bool (kept,); and each one's contact (rule 5's
+        share of its columns standing on something, NaN where none has a valid block beneath
+        it), float64 (kept,).
 
         The road plane ``z = a x + b y + c`` seen through the pixel ``(u, v)`` has the inverse
         camera depth ``(r_z - a r_x - b r_y) / (a o_x + b o_y + c - o_z)``, with ``r = M (u,
@@ -749,14 +765,16 @@ class GeometricRetriever:
         M, o = self._M, self._origin
         qu, qv, q0 = (M[2] - a * M[0] - b * M[1]) / (a * o[0] + b * o[1] + c - o[2])
         out = np.zeros(int(keep.sum()), dtype=bool)
-        if not qv > 0:  # the image's rows do not run down the road: no rule to apply
-            return out
         index = np.full(keep.size, -1, dtype=np.int64)
         index[keep] = np.arange(out.size)
         xs, ys, zs, ds = points
+        # the road's slope scales the incline alone, which is not read when it is not > 0
+        shape = kernels.surface_shape(labels, index, ds, p.stride, qv if qv > 0 else 1.0, CONTACT_RATIO,
+                                      EDGE_BLOCKS)
+        incline, contact = shape[:, 0], shape[:, 1]
+        if not qv > 0:  # the image's rows do not run down the road: no rule to apply
+            return out, contact
         if p.max_incline is not None:
-            shape = kernels.surface_shape(labels, index, ds, p.stride, qv, CONTACT_RATIO, EDGE_BLOCKS)
-            incline, contact = shape[:, 0], shape[:, 1]
             out |= (incline > p.max_incline) & (contact < p.min_contact)
             out |= np.isnan(contact) & (incline > max(p.max_incline, UNSUPPORTED_INCLINE))
         if p.min_occlusion is not None:
@@ -764,7 +782,7 @@ class GeometricRetriever:
                                       np.array([q0, qu, qv]), p.stride, p.min_height, OCCLUSION_RATIO,
                                       EDGE_BLOCKS)
             out |= np.where(flat, hides[:, 1], hides[:, 0]) < p.min_occlusion
-        return out
+        return out, contact
 
     def _fit_ground(self, x, y, z, d, candidates) -> tuple[tuple[float, float, float], float]:
         """The road plane ``(a, b, c)`` and its support (share of all blocks), or the

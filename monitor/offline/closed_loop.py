@@ -300,7 +300,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
     `` n{confirm_near}`` when every object near the bumper is, `` g{confirm_edge}`` when every
-    edge of the path is, `` o{confirm_emerged}`` when every object out of the road is),
+    edge of the path is, `` o{confirm_emerged}`` when every object out of the road is,
+    `` k{confirm_contact}`` when every object that touches the road too little is),
     `` e{emergency}`` for a gate with an emergency stage, `` m{memory}`` for one that
     remembers and `` w{walker_horizon}`` for one that watches walkers."""
     if config is None:
@@ -316,6 +317,8 @@ def driver_label(config: ShieldConfig | None) -> str:
                 gate += f" g{config.confirm_edge:g}"
             if config.confirm_emerged is not None:
                 gate += f" o{config.confirm_emerged:g}"
+            if config.confirm_contact is not None:
+                gate += f" k{config.confirm_contact:g}"
     if config.path_half_width is not None and config.emergency is not None:
         gate += f" e{config.emergency:g}"
     if config.path_half_width is not None and config.memory is not None:
@@ -502,7 +505,8 @@ def run_scenario(spec: ScenarioSpec, perception: Perception, monitor: RiskMonito
                 engaged = False
                 if m.acting(onset):
                     decision = m.shield.update(report.risk, speed=world.ego.speed, unseen=report.unseen,
-                                               time=world.time, emerged=emerged, walkers=walkers)
+                                               time=world.time, emerged=emerged, walkers=walkers,
+                                               contact=report.unseen_contact)
                     if decision.engaged and not (m.run.history["engaged"] and m.run.history["engaged"][-1]):
                         m.run.engagements.append({"time": world.time, "speed": world.ego.speed,
                                                   "deceleration": decision.deceleration,

@@ -22,10 +22,10 @@ to frame are the only parts with state), given each frame's risk, time, the ego'
 report's unseen objects and what of them came out of the road since the frame before
 (:func:`monitor.risk_monitor.unseen_emerged`, stored as ``emerged``; for a shield that
 confirms it); a resume replays it from the stored rows' ``risk``, ``time``, ``ego_speed``,
-``unseen``, ``emerged`` and ``walkers`` (the detector's walkers, for a shield that watches
-them). A frame that could not be processed has status ``unprocessed``, its ``error``, no
-risk and no shield decision (the shield keeps its state across it; the next frame has no
-frames before it to be compared with, as the first frame after a resume).
+``unseen``, ``unseen_contact``, ``emerged`` and ``walkers`` (the detector's walkers, for a
+shield that watches them). A frame that could not be processed has status ``unprocessed``,
+its ``error``, no risk and no shield decision (the shield keeps its state across it; the
+next frame has no frames before it to be compared with, as the first frame after a resume).
 """
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
     Fields: ``scene``, ``frame`` (index), ``key`` (file stem), ``token`` (nuScenes sample or
     null), ``time`` (s), ``ego_speed`` (m/s), then the monitor's report (``risk``, ``status``,
     ``reason``, ``iou``, ``rdd``, ``S``, ``P``, ``matched``, ``fired``, ``free_distance``,
-    ``unseen``, ``timings_ms``: see
+    ``unseen``, ``unseen_contact``, ``timings_ms``: see
     :meth:`monitor.risk_monitor.RiskReport.to_dict`), ``alignment`` (``matching``, then per S:
     ``partner`` row of P or -1, ``iou`` (its coverage under coverage matching), ``rdd``,
     ``counted``; ``objects``, then per detection ``det_iou``, ``det_rdd``, ``det_counted``,
@@ -105,7 +105,7 @@ def report_row(result: FrameResult, engaged: bool | None, deceleration: float | 
 
 #: what a resume reads from a processed frame's line besides ``ego_speed``: what the shield
 #: replays from and the decision it must give again
-_REPLAYED = ("risk", "unseen", "emerged", "walkers", "shield")
+_REPLAYED = ("risk", "unseen", "unseen_contact", "emerged", "walkers", "shield")
 
 
 def _stored_rows(value, columns: int):
@@ -114,8 +114,9 @@ def _stored_rows(value, columns: int):
     return np.empty((0, columns)) if isinstance(value, list) and not value else value
 
 
-def _stored_emerged(value):
-    """A line's ``emerged`` as the shield takes it: None, or (k,) shares with NaN for null."""
+def _stored_shares(value):
+    """A line's ``emerged`` or ``unseen_contact`` as the shield takes it: None, or (k,)
+    shares with NaN for null."""
     return None if value is None else np.array([np.nan if e is None else e for e in value], dtype=np.float64)
 
 
@@ -267,8 +268,9 @@ class RunOutput:
             try:
                 decision = scene.shield.update(row["risk"], speed=row["ego_speed"],
                                                unseen=_stored_rows(row["unseen"], 3), time=row["time"],
-                                               emerged=_stored_emerged(row["emerged"]),
-                                               walkers=_stored_rows(row["walkers"], 2))
+                                               emerged=_stored_shares(row["emerged"]),
+                                               walkers=_stored_rows(row["walkers"], 2),
+                                               contact=_stored_shares(row["unseen_contact"]))
             except (ValueError, TypeError) as exc:
                 raise ValueError(f"{where}: the shield cannot replay this line ({exc}); pass --overwrite") \
                     from None
@@ -302,7 +304,8 @@ class RunOutput:
                 before, scene.earlier = shift_earlier(scene.earlier, report, moved)
                 emerged = unseen_emerged(report, before, self.retriever)
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
-                                               time=result.timestamp, emerged=emerged, walkers=result.walkers)
+                                               time=result.timestamp, emerged=emerged, walkers=result.walkers,
+                                               contact=report.unseen_contact)
                 row = report_row(result, decision.engaged, decision.deceleration, emerged)
             scene.handle.write(json.dumps(row, allow_nan=False) + "\n")
             scene.take(row)

@@ -441,8 +441,24 @@ def test_unseen_says_where_the_objects_no_detection_covers_stand(geometric_monit
     paper = monitor.step(scene_depth, np.zeros((0, 7)))
     np.testing.assert_array_equal(paper.unseen, CAMERA.ground_extents(paper.S[~paper.alignment.matched]))
     # no view, no answer: the shield must not read "nothing unseen" into an invalid frame
-    assert geometric_monitor.step(np.full_like(scene_depth, np.nan), PEDESTRIAN).unseen is None
+    blind = geometric_monitor.step(np.full_like(scene_depth, np.nan), PEDESTRIAN)
+    assert blind.unseen is None and blind.unseen_contact is None
     assert json.loads(json.dumps(missed.to_dict()))["unseen"] == missed.unseen.tolist()
+
+
+def test_unseen_contact_is_the_views_contact_of_the_objects_no_detection_covers(geometric_monitor, monitor,
+                                                                                 scene_depth):
+    # the pedestrian stands on the road along her width (the view's rule 5 contact, 1.0)
+    view = geometric_monitor._retriever.view(scene_depth)
+    missed = geometric_monitor.step(scene_depth, np.zeros((0, 7)))
+    np.testing.assert_array_equal(missed.unseen_contact, view.contact)
+    assert missed.unseen_contact.tolist() == [1.0]
+    assert geometric_monitor.step(scene_depth, PEDESTRIAN).unseen_contact.shape == (0,)
+    # the paper's view does not measure it: NaN per unseen object, null in JSON
+    paper = monitor.step(scene_depth, np.zeros((0, 7)))
+    assert paper.unseen_contact.shape == (len(paper.unseen),) and np.isnan(paper.unseen_contact).all()
+    assert json.loads(json.dumps(paper.to_dict()))["unseen_contact"] == [None] * len(paper.unseen)
+    assert json.loads(json.dumps(missed.to_dict()))["unseen_contact"] == [1.0]
 
 
 def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_monitor, geometric_monitor,

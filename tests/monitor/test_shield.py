@@ -220,10 +220,10 @@ def test_describe_names_the_shield():
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
          "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
          "remembered 1 s, walkers stepping in within 1 s")
-    assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5)).startswith(
+    assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
-        "within 2.5 m of the bumper, reaching under 0.3 m into the path and 50 % out of the road: all) "
-        "confirmed in 2 of 3 frames")
+        "within 2.5 m of the bumper, reaching under 0.3 m into the path, 50 % out of the road and touching "
+        "the road in under 40 % of their columns: all) confirmed in 2 of 3 frames")
     assert describe_shield(ShieldConfig(emergency=None, memory=None, walker_horizon=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
@@ -362,6 +362,46 @@ def test_what_came_out_of_the_road_is_confirmed_first():
     assert Shield(asks).update(0.9, speed=10.0, unseen=None, time=0.0).cause == "no view"
     with pytest.raises(ValueError, match=r"confirm_emerged = 2.0, must be in \[0, 1\]"):
         ShieldConfig(confirm_emerged=2.0)
+
+
+def test_what_touches_nothing_is_confirmed_first():
+    asks = replace(STAGED, confirm_contact=0.5)
+
+    def decelerations(config, frames, contact):
+        shield = Shield(config)
+        return [shield.update(0.9, speed=10.0, unseen=u, time=0.1 * k, contact=c).deceleration
+                for k, (u, c) in enumerate(zip(frames, contact))]
+
+    # a wide object within the emergency reach (as above): at once, unless it stands on the
+    # road in under half of its columns; then once it stood there in 2 of 3 frames
+    wide = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
+    assert decelerations(asks, wide, [[0.2], [0.2]]) == [0.0, 6.0]
+    assert decelerations(asks, wide, [[0.0], [1.0]]) == [0.0, 6.0]
+    for measured in ([0.5], [1.0], [np.nan]):  # half of it or more on the road, or not measured: at once
+        assert decelerations(asks, wide[:1], [measured]) == [6.0]
+    # afloat in a new place each frame (left, then right of the centreline): never
+    flicker = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
+    assert decelerations(asks, flicker, [[0.0], [0.0]]) == [0.0, 0.0]
+    # a sighting that floats confirms one that floats (a barrier's arm seen twice), and one that
+    # stands (or cannot tell) one that stands: a narrow object, which is asked whatever its contact
+    narrow = [np.array([[3.8 + d, -0.1, 0.1]]) for d in (15.0, 14.0)]
+    for contact, expected in (([[0.0], [0.0]], 6.0), ([[1.0], [1.0]], 6.0), ([[1.0], [np.nan]], 6.0),
+                              ([[0.0], [1.0]], 0.0), ([[0.0], [np.nan]], 0.0), ([[1.0], [0.0]], 0.0)):
+        assert decelerations(asks, narrow, contact) == [0.0, expected]
+    # not asked without the setting, and then what floats confirms what stands
+    assert decelerations(replace(asks, confirm_contact=None), wide[:1], [[0.0]]) == [6.0]
+    assert decelerations(replace(asks, confirm_contact=None), narrow, [[0.0], [1.0]]) == [0.0, 6.0]
+    with pytest.raises(ValueError, match=r"contact = \[0.5, 0.5\]: expected one share in \[0, 1\] \(or NaN\) per "
+                                         r"row of unseen, shape \(1,\) \(RiskReport.unseen_contact\)"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, contact=[0.5, 0.5])
+    with pytest.raises(ValueError, match=r"contact = \[-0.1\]"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, contact=[-0.1])
+    with pytest.raises(ValueError, match=r"contact = None: a shield that confirms what touches nothing "
+                                         r"\(confirm_contact = 0.5\) needs a share per unseen object"):
+        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0)
+    assert Shield(asks).update(0.9, speed=10.0, unseen=None, time=0.0).cause == "no view"
+    with pytest.raises(ValueError, match=r"confirm_contact = 1.5, must be in \[0, 1\]"):
+        ShieldConfig(confirm_contact=1.5)
 
 
 def test_the_emergency_stage_is_checked_and_named():

@@ -71,7 +71,8 @@ def _replayed(frames, prior, config):
         emerged = mon.emerged(report, earlier)
         decision = shield.update(report.risk, speed=frame.ego_speed, unseen=report.unseen,
                                  time=frame.timestamp, emerged=emerged,
-                                 walkers=np.array(_walkers(frame, config)).reshape(-1, 2))
+                                 walkers=np.array(_walkers(frame, config)).reshape(-1, 2),
+                                 contact=report.unseen_contact)
         earlier, last = [(report, 0.0), *earlier][:2], frame.timestamp
         out.append((report, emerged, decision))
     return out
@@ -268,8 +269,9 @@ def _unseen(row: dict):
     return None if row["unseen"] is None else np.array(row["unseen"], dtype=np.float64).reshape(-1, 3)
 
 
-def _emerged(row: dict):
-    return None if row["emerged"] is None else np.array([np.nan if e is None else e for e in row["emerged"]])
+def _shares(row: dict, name: str):
+    """A row's ``emerged`` or ``unseen_contact``: None, or the shares with NaN for null."""
+    return None if row[name] is None else np.array([np.nan if e is None else e for e in row[name]])
 
 
 def _gated_argv(recording, out, config, *extra):
@@ -304,7 +306,8 @@ def test_a_gated_shield_gets_each_frames_speed_and_unseen_objects(recording, ser
             # the gate changes the decisions only, never the reports
             assert {k: v for k, v in row.items() if k != "shield"} == \
                 {k: v for k, v in other.items() if k != "shield"}
-            decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row), emerged=_emerged(row))
+            decision = shield.update(row["risk"], speed=row["ego_speed"], unseen=_unseen(row),
+                                     emerged=_shares(row, "emerged"), contact=_shares(row, "unseen_contact"))
             assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
             assert row["shield"]["engaged"] is gated_engaged(row, c)
     # drive-b (rain) moves at 4.4 m/s with high risk from objects beside its path or beyond its

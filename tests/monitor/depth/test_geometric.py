@@ -282,6 +282,27 @@ def test_a_gate_arm_across_the_path_is_an_object():
         np.testing.assert_allclose(view.extents[0], [x - 0.05, -1.25, 1.25], atol=0.15)
 
 
+def test_each_object_says_how_much_of_it_stands_on_the_road():
+    # a car, a pedestrian and debris meet the road along their whole width (the road right
+    # beneath each column's lowest block at its depth); the raised rear and the gate arm hang
+    # above it (the road beneath them 1.5 / (1.5 - 0.5) and 1.5 / (1.5 - 0.95) times farther
+    # than their bottoms, both over CONTACT_RATIO 1.2); a box cut by the image's bottom edge
+    # has nothing beneath it to tell
+    arm = [9.0, 0.0, 1.0, 2.5, 0.1, 0.1, 0.0]
+    cut = [5.5, 0.0, 0.4, 0.8, 0.4, 0.8, 0.0]
+    for boxes, expected in (([CAR_AHEAD, PEDESTRIAN, DEBRIS], [1.0, 1.0, 1.0]), ([RAISED_REAR], [0.0]),
+                            ([arm], [0.0]), ([cut], [np.nan])):
+        depth, labels = _render(boxes)
+        view = GeometricRetriever(CAMERA).view(depth)
+        assert view.contact.shape == (len(view.boxes),) and view.contact.dtype == np.float64
+        for k, share in enumerate(expected):
+            found, score = _match(view.boxes, _truth(labels, depth, k))
+            assert score > 0.3
+            row = int(np.flatnonzero((view.boxes == found).all(axis=1))[0])
+            np.testing.assert_equal(view.contact[row], share)
+    assert GeometricRetriever(CAMERA).view(_render([])[0]).contact.shape == (0,)
+
+
 def test_what_stands_hides_what_is_behind_it_and_is_kept():
     # the objects of the floating test, a wall behind a car (above its roof the image sees
     # the wall, a few metres behind), and a child 0.7 m in front of a car (above the child's
