@@ -329,13 +329,19 @@ def test_an_edge_of_the_path_is_confirmed_first():
         ShieldConfig(confirm_edge="thin")
 
 
+def _with_shares(name):
+    """The decelerations a shield of ``config`` requests, at 10 m/s and a risk of 0.9, over
+    ``frames`` of unseen objects, each frame with its ``name`` shares (emerged or contact)."""
+    def decelerations(config, frames, shares):
+        shield = Shield(config)
+        return [shield.update(0.9, speed=10.0, unseen=u, time=0.1 * k, **{name: s}).deceleration
+                for k, (u, s) in enumerate(zip(frames, shares))]
+    return decelerations
+
+
 def test_what_came_out_of_the_road_is_confirmed_first():
     asks = replace(STAGED, confirm_emerged=0.5)
-
-    def decelerations(config, frames, emerged):
-        shield = Shield(config)
-        return [shield.update(0.9, speed=10.0, unseen=u, time=0.1 * k, emerged=e).deceleration
-                for k, (u, e) in enumerate(zip(frames, emerged))]
+    decelerations = _with_shares("emerged")
 
     # a wide object 15 m ahead of the bumper, within the emergency reach at 10 m/s (15.33 m),
     # then 1 m nearer: at once, unless half of it or more stood where the frames before saw the
@@ -366,11 +372,7 @@ def test_what_came_out_of_the_road_is_confirmed_first():
 
 def test_what_touches_nothing_is_confirmed_first():
     asks = replace(STAGED, confirm_contact=0.5)
-
-    def decelerations(config, frames, contact):
-        shield = Shield(config)
-        return [shield.update(0.9, speed=10.0, unseen=u, time=0.1 * k, contact=c).deceleration
-                for k, (u, c) in enumerate(zip(frames, contact))]
+    decelerations = _with_shares("contact")
 
     # a wide object within the emergency reach (as above): at once, unless it stands on the
     # road in under half of its columns; then once it stood there in 2 of 3 frames
