@@ -390,8 +390,9 @@ class Shield:
             if unconfirmed.any():
                 hits = np.zeros(near.shape[0], dtype=np.int64)
                 afloat = floats[inside]
-                for t, then, then_afloat in self._history:  # a sighting that floats confirms one that
-                    dt = time - t                             # floats, one that stands one that stands
+                # a sighting that floats confirms one that floats, one that stands one that stands
+                for t, then, then_afloat in self._history:
+                    dt = time - t
                     hits[afloat] += consistent(near[afloat], then[then_afloat], dt, speed)
                     hits[~afloat] += consistent(near[~afloat], then[~then_afloat], dt, speed)
                 unconfirmed &= hits < c.confirm_frames - 1
