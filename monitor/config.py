@@ -271,6 +271,14 @@ class ShieldConfig:
         when she stands within reach (``emergency`` within the emergency reach). The shield
         then needs each frame's walkers (:meth:`monitor.shield.Shield.update`). None: no
         walker gate.
+    unseen_walkers : float >= 0 or None
+        With the walker gate, metres: an unseen object no wider than this that stands on the
+        road (its contact, :attr:`monitor.RiskReport.unseen_contact`, at least
+        :data:`monitor.walkers.STANDING_CONTACT`), beyond ``confirm_near`` of the bumper, is
+        followed as a walker too (:class:`monitor.walkers.SightingTracks`), and engages the
+        shield as a detected one does: a walker the detector misses is seen by the depth
+        view. The shield then needs each frame's contact. None: only the detector's walkers.
+        Read only with the walker gate.
     """
 
     threshold: float = 0.3
@@ -291,6 +299,7 @@ class ShieldConfig:
     confirm_contact: float | None = None
     memory: float | None = 1.0
     walker_horizon: float | None = 1.0
+    unseen_walkers: float | None = 1.0
 
     def __post_init__(self):
         _set(self, "threshold", _unit(self.threshold, "threshold"))
@@ -351,6 +360,12 @@ class ShieldConfig:
                 raise ValueError(f"walker_horizon = {horizon:g} needs a path gate (path_half_width), which is "
                                  "null: set both, or walker_horizon to null (as the paper's shield has it)")
             _set(self, "walker_horizon", horizon)
+        if self.unseen_walkers is not None:
+            width = _number(self.unseen_walkers, "unseen_walkers")
+            if not (math.isfinite(width) and width >= 0):
+                raise ValueError(f"unseen_walkers = {self.unseen_walkers!r}, must be >= 0 metres (or null: only "
+                                 "the detector's walkers)")
+            _set(self, "unseen_walkers", width)
 
 
 @dataclass(frozen=True)

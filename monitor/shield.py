@@ -107,6 +107,13 @@ is sure of her speed, for a walker at 1 m/s when she is nearly in the path; this
 on a second of her positions. It acts on what the detector reports, not on what it misses: a
 backstop for the planner's walker prediction (docs/closed-loop.md).
 
+With ``unseen_walkers`` as well, it follows the depth view's unseen objects that could be
+walkers in the same way (:class:`monitor.walkers.SightingTracks`): no wider than that, standing
+on the road (``contact``, :data:`monitor.walkers.STANDING_CONTACT`) and ahead of the bumper by
+``confirm_near`` or more. A walker the detector misses steps out from between parked cars into
+the depth view's corridor before she reaches the path; a blob of the depth floats and is in a
+new place each frame, and the side of a parked car is wider than a walker.
+
 A NaN risk is never "below the threshold": it engages the shield, gate or no gate (the
 monitor never produces one; this guards other risk sources).
 """
@@ -120,11 +127,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from monitor.config import ShieldConfig
-from monitor.walkers import BODY_HALF_WIDTH, WalkerTracks, entering
+from monitor.walkers import BODY_HALF_WIDTH, STANDING_CONTACT, SightingTracks, WalkerTracks, entering
 
 
 #: what keeps the shield engaged in a frame (:attr:`ShieldDecision.cause`)
-CAUSES = ("risk", "no view", "at once", "confirmed", "remembered", "walker", "held")
+CAUSES = ("risk", "no view", "at once", "confirmed", "remembered", "walker", "unseen walker", "held")
 
 
 @dataclass(frozen=True)
@@ -143,14 +150,16 @@ class ShieldDecision:
         threshold (the paper's shield, or a NaN risk); with a path gate, ``no view``, a frame
         without a view; ``at once``, an unseen object in the path within reach that needs no
         confirmation; ``confirmed``, one that did and got it; ``remembered``, a remembered
-        object (``memory``); ``walker``, a walker stepping into the path
-        (``walker_horizon``); ``held``, kept by the hold (or the hysteresis) after the last
+        object (``memory``); ``walker``, a walker the detector reports stepping into the path
+        (``walker_horizon``); ``unseen walker``, one only the depth view sees
+        (``unseen_walkers``); ``held``, kept by the hold (or the hysteresis) after the last
         of those.
     objects : tuple of (x, y_min, y_max)
         With ``at once`` and ``confirmed``, the unseen objects that counted (ego frame,
-        metres, as :attr:`monitor.RiskReport.unseen`); with ``walker``, the walkers stepping
-        in within reach, where they stand now (``y`` of her track's line, plus and minus
-        :data:`monitor.walkers.BODY_HALF_WIDTH`); empty otherwise.
+        metres, as :attr:`monitor.RiskReport.unseen`); with ``walker`` and ``unseen
+        walker``, the walkers stepping in within reach, where they stand now (``y`` of her
+        track's line, plus and minus :data:`monitor.walkers.BODY_HALF_WIDTH`); empty
+        otherwise.
     """
 
     engaged: bool
@@ -189,7 +198,9 @@ def describe_shield(config: ShieldConfig) -> str:
     if config.path_half_width is not None and config.memory is not None:
         parts.append(f"objects remembered {config.memory:g} s")
     if config.walker_horizon is not None:
-        parts.append(f"walkers stepping in within {config.walker_horizon:g} s")
+        seen = "" if config.unseen_walkers is None else \
+            f" (unseen ones too: standing objects up to {config.unseen_walkers:g} m wide)"
+        parts.append(f"walkers stepping in within {config.walker_horizon:g} s{seen}")
     return ", ".join(parts)
 
 
@@ -210,12 +221,12 @@ class Shield:
     (True, True, False)
     >>> gated = Shield()  # 1 m wide in the path 12 m ahead, then beside it: the hold keeps 5 frames
     >>> ahead, beside = [[12.0, -0.5, 0.5]], [[12.0, 2.0, 3.0]]
-    >>> [gated.update(0.8, speed=8.0, unseen=u, time=0.1 * k, walkers=[]).engaged  # no walker
-    ...  for k, u in enumerate([ahead] + [beside] * 6)]
+    >>> [gated.update(0.8, speed=8.0, unseen=u, time=0.1 * k, walkers=[], contact=[1.0]).engaged
+    ...  for k, u in enumerate([ahead] + [beside] * 6)]  # no walker; each stands on the road
     [True, True, True, True, True, True, False]
     >>> small = Shield()  # 0.1 m wide, 10 m ahead: counts once it stood there in 2 of 3 frames
     >>> [small.update(0.8, speed=8.0, unseen=[[10.0 - 0.8 * k, 0.0, 0.1]], time=0.1 * k,
-    ...               walkers=[]).engaged for k in range(3)]
+    ...               walkers=[], contact=[1.0]).engaged for k in range(3)]
     [False, True, True]
     """
 
@@ -240,6 +251,7 @@ class Shield:
         # the number of sightings
         self._memory = np.zeros((0, 6))
         self._walkers = WalkerTracks()  # the detector's walkers (walker_horizon)
+        self._sightings = SightingTracks()  # the depth view's (unseen_walkers)
 
     def reach(self, speed: float, deceleration: float | None = None) -> float:
         """Metres ahead of the front bumper in which an unseen object counts at ``speed``
@@ -289,7 +301,18 @@ class Shield:
         decel, kept, why, counted = c.deceleration, 0.0, "risk", ()
         if c.path_half_width is not None:
             decel, kept, why, counted = self._in_path(speed, unseen, time, risk > c.threshold, emerged, contact)
-        walker, stepping = (0.0, ()) if c.walker_horizon is None else self._walker(float(speed), walkers)
+        walker, stepping, who = 0.0, (), "walker"
+        if c.walker_horizon is not None:
+            if walkers is None:
+                raise ValueError(f"walkers = None: a shield that watches walkers (walker_horizon = "
+                                 f"{c.walker_horizon:g} s) needs the frame's walkers, (w, 2) rows x, y "
+                                 "(monitor.walkers.walker_positions of the frame's detections)")
+            walker, stepping = self._walker(float(speed), walkers, self._walkers)
+            if c.unseen_walkers is not None:
+                unseen_walker, unseen_stepping = self._walker(float(speed), self._standing(unseen, contact),
+                                                              self._sightings)
+                if unseen_walker > walker:
+                    walker, stepping, who = unseen_walker, unseen_stepping, "unseen walker"
         cause = ""
         if math.isnan(risk) or (risk > c.threshold and decel > 0.0):
             self.engaged, self._since_trigger = True, 0
@@ -297,7 +320,7 @@ class Shield:
             cause = "risk" if math.isnan(risk) else why
         elif walker > 0.0:
             self.engaged, self._since_trigger, self._decel = True, 0, walker
-            cause, counted = "walker", stepping
+            cause, counted = who, stepping
         elif self.engaged:
             self._since_trigger += 1
             if kept > 0.0:
@@ -309,7 +332,7 @@ class Shield:
         elif kept > 0.0:  # a remembered object came within reach again: no new hold
             self.engaged, self._since_trigger, self._decel = True, c.hold_frames, kept
             cause = "remembered"
-        if cause not in ("at once", "confirmed", "walker"):
+        if cause not in ("at once", "confirmed", "walker", "unseen walker"):
             counted = ()
         return ShieldDecision(self.engaged, self._decel if self.engaged else 0.0, risk, cause, counted)
 
@@ -409,18 +432,32 @@ class Shield:
             self._history.append((time, np.zeros((0, 3)) if unseen is None else unseen, floats))
         return decel, (0.0 if c.memory is None else self._remembered(float(speed))), why, counted
 
-    def _walker(self, speed: float, walkers) -> tuple[float, tuple]:
+    def _standing(self, unseen, contact) -> np.ndarray:
+        """The unseen objects that could be walkers (``unseen_walkers``), as (s, 2) rows ``x,
+        y`` (the middle of their span): no wider than ``unseen_walkers``, standing on the road
+        (``contact`` at least :data:`monitor.walkers.STANDING_CONTACT`; NaN, not measured,
+        does not stand) and ahead of the bumper by ``confirm_near`` or more, where the view
+        sees the road beneath them; none for a frame without a view. Call after
+        :meth:`_in_path`, which validated ``unseen`` and ``contact``."""
+        c = self.config
+        if unseen is None:
+            return np.zeros((0, 2))
+        if contact is None:
+            raise ValueError(f"contact = None: a shield that follows unseen walkers (unseen_walkers = "
+                             f"{c.unseen_walkers:g} m) needs a share per unseen object, RiskReport.unseen_contact")
+        x, y_min, y_max = np.asarray(unseen, dtype=np.float64).reshape(-1, 3).T
+        standing = (y_max - y_min <= c.unseen_walkers) & (np.asarray(contact, dtype=np.float64) >= STANDING_CONTACT)
+        standing &= x - c.front >= (0.0 if c.confirm_near is None else c.confirm_near)
+        return np.stack([x, 0.5 * (y_min + y_max)], axis=1)[standing]
+
+    def _walker(self, speed: float, walkers, tracks) -> tuple[float, tuple]:
         """The deceleration the walkers stepping into the path within reach call for, m/s^2
         (0.0 for none): ``emergency`` for one within the emergency reach, else
         ``deceleration``; and those walkers as :attr:`ShieldDecision.objects` gives them.
-        Adds the frame's ``walkers`` to the tracks (after :meth:`_in_path` moved the
-        odometer to this frame)."""
+        Adds the frame's ``walkers`` to ``tracks`` (:class:`monitor.walkers.WalkerTracks`;
+        after :meth:`_in_path` moved the odometer to this frame)."""
         c = self.config
-        if walkers is None:
-            raise ValueError(f"walkers = None: a shield that watches walkers (walker_horizon = "
-                             f"{c.walker_horizon:g} s) needs the frame's walkers, (w, 2) rows x, y "
-                             "(monitor.walkers.walker_positions of the frame's detections)")
-        tracks = self._walkers.update(walkers, self._time, self._odometer)
+        tracks = tracks.update(walkers, self._time, self._odometer)
         stepping = tracks[entering(tracks, c.path_half_width, c.front, speed, c.walker_horizon)]
         stepping = stepping[stepping[:, 0] - c.front <= self.reach(speed)]
         x, y = stepping[:, 0], stepping[:, 1]

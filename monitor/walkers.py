@@ -19,6 +19,18 @@ A track's lateral speed is the least-squares slope of its lateral positions over
 still within the detector's noise, or two people joined into one track). The frames must
 come at 10 Hz or so (the closed loop's rate): at nuScenes' 2 Hz keyframes three positions
 span a whole second and a walker moves 0.5-1 m between them; hardly a track forms.
+
+:class:`SightingTracks` follows the depth view's unseen objects that could be walkers in
+the same way (``shield.unseen_walkers``): a walker the detector misses is still seen by the
+depth view once she is in its corridor. Their positions need two things more. A monocular
+depth's scale error changes from frame to frame and moves an object's ``x`` and ``y``
+together along its line of sight (a post 2.5 m beside the path jumps 0.15 m across with a
+6 % error), so a track keeps each sighting's bearing ``y / x`` and puts all of them at one
+depth: a straight line fitted to the track's road positions over time. And an object riding
+along the road (a cyclist the detector missed) turns its bearing too, as a walker would, so
+a track whose fitted speed along the road exceeds :data:`MAX_ALONG_SPEED` is nobody walking
+across; the line needs more sightings over a longer time to tell
+(:data:`SIGHTING_MIN_POINTS`, :data:`SIGHTING_MIN_SPAN_S`).
 """
 from __future__ import annotations
 
@@ -42,6 +54,18 @@ MIN_SPAN_S = 0.15
 WALKING_SPEED = (0.3, 3.0)
 #: metres: half a walker's width, beyond her box's centre
 BODY_HALF_WIDTH = 0.3
+#: the share of an unseen object's columns that must stand on the road
+#: (:attr:`monitor.RiskReport.unseen_contact`) for the depth view's sighting to be a walker's
+#: (``shield.unseen_walkers``): a walker meets the road at her feet; a blob of the depth floats
+STANDING_CONTACT = 0.5
+#: :class:`SightingTracks`: the share of its ``x`` by which a sighting's road position may
+#: lie from its track's last one (the depth's error, on top of :data:`ASSOCIATION_M`) ...
+DEPTH_TOLERANCE = 0.15
+#: ... the positions a track needs in its window, the seconds they must span ...
+SIGHTING_MIN_POINTS = 5
+SIGHTING_MIN_SPAN_S = 0.4
+#: ... and the fastest it may move along the road, m/s (a cyclist rides faster)
+MAX_ALONG_SPEED = 2.0
 
 
 def walker_positions(boxes3d: np.ndarray, classes: np.ndarray, scores: np.ndarray,
@@ -95,8 +119,9 @@ class WalkerTracks:
         Returns
         -------
         ndarray of shape (n, 3), float64
-            Per walking track: ``x`` now (ego frame, the median of its positions in the
-            window), ``y`` now (the fitted line's), lateral speed (m/s, positive leftwards).
+            Per walking track: ``x`` now (ego frame: the median of its road places here,
+            their fitted line's for :class:`SightingTracks`), ``y`` now (the fitted line's),
+            lateral speed (m/s, positive leftwards).
 
         Raises
         ------
@@ -112,31 +137,116 @@ class WalkerTracks:
         live = [t for t in self._tracks if time - t[-1][0] <= TRACK_GAP_S]
         extended = set()
         for x, y in walkers.tolist():
-            best, nearest = None, ASSOCIATION_M
+            best, nearest = None, math.inf
             for i, track in enumerate(live):
                 if i in extended:
                     continue
-                d = math.hypot(track[-1][1] - (x + odometer), track[-1][2] - y)
-                if d <= nearest:
+                d = self._distance(track[-1], x, y, odometer)
+                if math.isfinite(d) and d <= nearest:
                     best, nearest = i, d
             if best is None:
-                live.append([(time, x + odometer, y)])
+                live.append([self._row(time, x, y, odometer)])
                 extended.add(len(live) - 1)
             else:
-                live[best].append((time, x + odometer, y))
+                live[best].append(self._row(time, x, y, odometer))
                 extended.add(best)
         self._tracks = [[p for p in t if time - p[0] <= TRACK_WINDOW_S] for t in live]
         moving = []
         for track in self._tracks:
-            if len(track) < MIN_POINTS:
+            rows = np.array(track)
+            if len(rows) < self.min_points or np.ptp(rows[:, 0]) < self.min_span:
                 continue
-            t, x, y = np.array(track).T
-            if np.ptp(t) < MIN_SPAN_S:
-                continue
-            speed, now = np.polyfit(t - time, y, 1)
-            if WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1]:
-                moving.append((float(np.median(x)) - odometer, now, speed))
+            now = self._motion(rows, time, odometer)
+            if now is not None:
+                moving.append(now)
         return np.array(moving, dtype=np.float64).reshape(-1, 3)
+
+    #: positions (in the window) a track needs before it has a speed, and the seconds they span
+    min_points, min_span = MIN_POINTS, MIN_SPAN_S
+
+    @staticmethod
+    def _row(time: float, x: float, y: float, odometer: float) -> tuple:
+        """What a track keeps of a position: ``time``, its place along the road, ``y``."""
+        return time, x + odometer, y
+
+    @staticmethod
+    def _distance(last: tuple, x: float, y: float, odometer: float) -> float:
+        """How far a position lies from a track's ``last`` row, metres (inf: too far to join)."""
+        d = math.hypot(last[1] - (x + odometer), last[2] - y)
+        return d if d <= ASSOCIATION_M else math.inf
+
+    @staticmethod
+    def _motion(rows: np.ndarray, time: float, odometer: float) -> tuple | None:
+        """A track's ``x, y, lateral speed`` now from its rows (n, 3), None if it does not
+        walk: the least-squares line of ``y`` over time; ``x``, the median road place."""
+        t, x, y = rows.T
+        speed, now = np.polyfit(t - time, y, 1)
+        if WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1]:
+            return float(np.median(x)) - odometer, float(now), float(speed)
+        return None
+
+
+class SightingTracks(WalkerTracks):
+    """The depth view's sightings of what could be a walker, followed on the road.
+
+    As :class:`WalkerTracks`, but a sighting joins a track whose last road position lies
+    within :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of its ``x`` along the road
+    and within :data:`ASSOCIATION_M` across it (its last bearing at this sighting's depth),
+    and a track's positions are its bearings put at one depth, a line fitted to its road
+    positions over time; a track moving along the road faster than
+    :data:`MAX_ALONG_SPEED` does not walk (module docstring). ``update`` takes sightings
+    ahead of the ego origin (``x > 0``).
+
+    Examples
+    --------
+    >>> tracks = SightingTracks()  # 20 m ahead, 2.5 m to the left, walking right at 1 m/s
+    >>> scale = [1.03, 0.98, 1.01, 0.99, 1.02, 0.98]  # the depth's error, frame by frame
+    >>> for k, s in enumerate(scale):  # the ego at 10 m/s
+    ...     moving = tracks.update([[s * (20.0 - k), s * (2.5 - 0.1 * k)]], time=0.1 * k,
+    ...                            odometer=float(k))
+    >>> moving.round(2).tolist()
+    [[14.85, 1.98, -1.1]]
+    """
+
+    min_points, min_span = SIGHTING_MIN_POINTS, SIGHTING_MIN_SPAN_S
+
+    def update(self, walkers, time: float, odometer: float) -> np.ndarray:
+        """As :meth:`WalkerTracks.update`, for the sightings ``walkers`` (k, 2) ``x, y``;
+        ValueError for one at ``x <= 0`` too."""
+        walkers = np.asarray(walkers, dtype=np.float64)
+        if walkers.ndim == 2 and walkers.shape[1] == 2 and np.isfinite(walkers).all() \
+                and not (walkers[:, 0] > 0).all():
+            raise ValueError(f"walkers x = {walkers[:, 0].tolist()}: sightings must lie ahead of the ego "
+                             "origin, x > 0 metres")
+        return super().update(walkers, time, odometer)
+
+    @staticmethod
+    def _row(time: float, x: float, y: float, odometer: float) -> tuple:
+        """``time``, the road place, the bearing ``y / x`` and ``x``."""
+        return time, x + odometer, y / x, x
+
+    @staticmethod
+    def _distance(last: tuple, x: float, y: float, odometer: float) -> float:
+        """How far a sighting lies from a track's ``last`` row, in tolerances (inf: too far):
+        along the road in units of :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of
+        ``x``, across it (the last bearing at the last road place, seen from here) in
+        :data:`ASSOCIATION_M`."""
+        along = abs(last[1] - (x + odometer)) / (ASSOCIATION_M + DEPTH_TOLERANCE * x)
+        across = abs(last[2] * (last[1] - odometer) - y) / ASSOCIATION_M
+        return math.hypot(along, across) if along <= 1.0 and across <= 1.0 else math.inf
+
+    @staticmethod
+    def _motion(rows: np.ndarray, time: float, odometer: float) -> tuple | None:
+        """``x, y, lateral speed`` now from rows (n, 4), None if it does not walk: the road
+        place's least-squares line over time gives each sighting's depth, and the bearings
+        put at those depths the line of ``y``."""
+        t, road, bearing, x = rows.T
+        along, place = np.polyfit(t - time, road, 1)
+        depth = along * (t - time) + place - (road - x)  # road - x: the odometer then
+        speed, now = np.polyfit(t - time, bearing * depth, 1)
+        if WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1] and abs(along) <= MAX_ALONG_SPEED:
+            return float(place) - odometer, float(now), float(speed)
+        return None
 
 
 def entering(tracks: np.ndarray, half_width: float, front: float, speed: float, horizon: float) -> np.ndarray:

@@ -303,7 +303,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     edge of the path is, `` o{confirm_emerged}`` when every object out of the road is,
     `` k{confirm_contact}`` when every object that touches the road too little is),
     `` e{emergency}`` for a gate with an emergency stage, `` m{memory}`` for one that
-    remembers and `` w{walker_horizon}`` for one that watches walkers."""
+    remembers and `` w{walker_horizon}`` for one that watches walkers (`` u{unseen_walkers}``
+    when unseen ones too)."""
     if config is None:
         return BASELINE
     gate = "" if config.path_half_width is None else f" p{config.path_half_width:.2f}"
@@ -325,6 +326,8 @@ def driver_label(config: ShieldConfig | None) -> str:
         gate += f" m{config.memory:g}"
     if config.walker_horizon is not None:
         gate += f" w{config.walker_horizon:g}"
+        if config.unseen_walkers is not None:
+            gate += f" u{config.unseen_walkers:g}"
     return f"t{config.threshold:.2f} r{config.release:.2f} h{config.hold_frames}{gate}"
 
 

@@ -20,7 +20,7 @@ baseline run of the same scenario:
 - hazard-free drives: the **false-brake rate** (runs in which the shield engaged at all),
   what engaged it first in those runs (``Run.engagements``' cause: an unseen object counted
   at once or once confirmed, a remembered one, a frame without a view, a walker stepping
-  in) and what the nearest object that engaged it first really lay on (``on``,
+  in, detected or unseen) and what the nearest object that engaged it first really lay on (``on``,
   :mod:`monitor.offline.attribution`: the road, a car beside the path, ...), the share of
   time spent braking and the **added trip time** (relative to the baseline's trip over the
   same route).

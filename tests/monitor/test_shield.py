@@ -219,7 +219,7 @@ def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach "
          "and within 2.5 m of the bumper: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects "
-         "remembered 1 s, walkers stepping in within 1 s")
+         "remembered 1 s, walkers stepping in within 1 s (unseen ones too: standing objects up to 1 m wide)")
     assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
         "within 2.5 m of the bumper, reaching under 0.3 m into the path, 50 % out of the road and touching "
@@ -537,7 +537,7 @@ def test_each_decision_says_why():
 
 # ------------------------------------------------------------------- the walker gate
 
-WATCHES = replace(STAGED, walker_horizon=1.0)  # hold 2 frames, emergency 6 m/s^2, walkers within 1 s
+WATCHES = replace(STAGED, walker_horizon=1.0, unseen_walkers=None)  # hold 2 frames, emergency 6 m/s^2, walkers within 1 s
 
 
 def _crossing(config, x0, vy, frames, speed=8.0):
@@ -590,3 +590,61 @@ def test_the_walker_gate_is_checked_and_named():
         Shield(WATCHES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0)
     with pytest.raises(ValueError, match=r"walkers has shape \(2,\)"):
         Shield(WATCHES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0, walkers=[1.0, 2.0])
+
+
+# ------------------------------------------------------------------- unseen walkers
+
+SEES = replace(WATCHES, unseen_walkers=1.0)  # ... and the depth view's standing objects up to 1 m wide
+
+
+def _sighted(config, x0, vy, frames, speed=8.0, width=0.5, contact=1.0):
+    """Decisions for an unseen object ``width`` m wide standing on the road ``x0`` m ahead of
+    the ego origin at the start (its near edge), centred 4 m to the left, walking across at
+    ``vy`` m/s, with ``contact``; the detector reports no walker; risk 0."""
+    shield = Shield(config)
+    return [shield.update(0.0, speed=speed, time=0.1 * k, walkers=[], contact=[contact],
+                          unseen=[[x0 - speed * 0.1 * k, 4.0 + vy * 0.1 * k - width / 2,
+                                   4.0 + vy * 0.1 * k + width / 2]]) for k in range(frames)]
+
+
+def test_an_unseen_walker_stepping_into_the_path_engages_as_a_detected_one():
+    # as the detected walker above: from k = 7 her line reaches the path within the horizon
+    # (a sighting track has its five positions over 0.4 s from k = 4 on)
+    decisions = _sighted(SEES, 24.0, -1.5, 9)
+    assert [d.engaged for d in decisions] == [False] * 7 + [True, True]
+    assert [(d.cause, d.deceleration) for d in decisions[7:]] == [("unseen walker", 3.0)] * 2
+    assert np.array(decisions[7].objects) == pytest.approx(np.array([[18.4, 2.95 - 0.3, 2.95 + 0.3]]))
+    assert [(d.cause, d.deceleration) for d in _sighted(SEES, 18.0, -1.5, 8)][6:] == \
+        [("", 0.0), ("unseen walker", 6.0)]
+    # without the option the depth view's objects beside the path engage nothing at risk 0
+    assert not any(d.engaged for d in _sighted(WATCHES, 24.0, -1.5, 9))
+
+
+def test_what_is_wide_floats_stands_still_or_near_the_bumper_is_no_unseen_walker():
+    assert not any(d.engaged for d in _sighted(SEES, 24.0, -1.5, 12, width=1.5))  # a car's side
+    assert not any(d.engaged for d in _sighted(SEES, 24.0, -1.5, 12, contact=0.2))  # floats
+    assert not any(d.engaged for d in _sighted(SEES, 24.0, -1.5, 12, contact=np.nan))  # cannot tell
+    assert not any(d.engaged for d in _sighted(SEES, 24.0, 0.0, 12))  # along the kerb
+    # at 1 m/s, 2.2 m ahead of the bumper: within confirm_near (2.5 m) nothing is followed;
+    # without the near zone she engages from k = 7 (2.2 - 0.7 = 1.5 m ahead, within the reach
+    # of 1 / 6 + 0.5 + 2 m)
+    near = replace(SEES, confirm_near=2.5)
+    assert not any(d.engaged for d in _sighted(near, 6.0, -1.5, 9, speed=1.0))
+    assert [d.engaged for d in _sighted(SEES, 6.0, -1.5, 9, speed=1.0)] == [False] * 7 + [True, True]
+
+
+def test_unseen_walkers_are_checked_and_named():
+    with pytest.raises(ValueError, match=r"unseen_walkers = -1.0, must be >= 0 metres \(or null: only the "
+                                         r"detector's walkers\)"):
+        ShieldConfig(unseen_walkers=-1.0)
+    # read only with the walker gate
+    assert describe_shield(replace(SEES, walker_horizon=None)) == describe_shield(replace(WATCHES, walker_horizon=None))
+    assert describe_shield(SEES).endswith(
+        "walkers stepping in within 1 s (unseen ones too: standing objects up to 1 m wide)")
+    with pytest.raises(ValueError, match=r"contact = None: a shield that follows unseen walkers \(unseen_walkers = "
+                                         r"1 m\) needs a share per unseen object, RiskReport.unseen_contact"):
+        Shield(SEES).update(0.0, speed=8.0, unseen=np.zeros((0, 3)), time=0.0, walkers=[])
+    with pytest.raises(ValueError, match=r"contact = \[1.0, 1.0\]: expected one share in \[0, 1\]"):
+        Shield(SEES).update(0.0, speed=8.0, unseen=[[10.0, 2.0, 2.5]], time=0.0, walkers=[], contact=[1.0, 1.0])
+    # a frame without a view has nothing to follow (and no contact to ask for)
+    assert Shield(SEES).update(0.0, speed=8.0, unseen=None, time=0.0, walkers=[]).engaged is False

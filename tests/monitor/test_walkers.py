@@ -1,9 +1,10 @@
 """The detector's walkers, tracked on the road: positions, association, the fitted lateral
-speed by hand, and which tracks step into the path."""
+speed by hand, and which tracks step into the path; the depth view's sightings, their bearings
+put at one depth."""
 import numpy as np
 import pytest
 
-from monitor.walkers import WalkerTracks, entering, walker_positions
+from monitor.walkers import SightingTracks, WalkerTracks, entering, walker_positions
 
 
 def test_walker_positions_keep_the_walkers_scoring_enough():
@@ -83,6 +84,75 @@ def test_walkers_must_be_finite_rows_of_two():
         WalkerTracks().update([[1.0, 2.0, 3.0]], time=0.0, odometer=0.0)
     with pytest.raises(ValueError, match="expected finite"):
         WalkerTracks().update([[np.nan, 2.0]], time=0.0, odometer=0.0)
+
+
+# ------------------------------------------------------------------- the depth view's sightings
+
+def _sighted(points, odometer=None, dt=0.1):
+    """Feed :class:`SightingTracks` one object's ego-frame ``(x, y)`` per frame (the ego at
+    rest unless ``odometer`` gives its travel per frame); the last output."""
+    tracks, out = SightingTracks(), None
+    for k, (x, y) in enumerate(points):
+        out = tracks.update([[x, y]], time=dt * k, odometer=0.0 if odometer is None else odometer[k])
+    return out
+
+
+def test_sightings_put_the_bearings_at_one_depth_by_hand():
+    # a walker 10 m ahead (the ego at rest) crossing from y = 2.0 at 1 m/s, t = 0 .. 0.4; the
+    # depth reads her at 9.9, 10.2, 9.8, 10.2, 9.9 m: each sighting's x and y scaled alike
+    # (scale 0.99, 1.02, 0.98, 1.02, 0.99). The road places' line is flat at 10.0 (the
+    # deviations -0.1, 0.2, -0.2, 0.2, -0.1 sum to 0, and so do their products with t - 0.2:
+    # 0.02 - 0.02 + 0 + 0.02 - 0.02), so every bearing (2 - t) / 10 is put at 10 m: y = 2 - t,
+    # exactly her line: now (t = 0.4) 1.6 m, -1 m/s
+    t = np.arange(5) * 0.1
+    scale = np.array([0.99, 1.02, 0.98, 1.02, 0.99])
+    points = np.stack([10.0 * scale, (2.0 - t) * scale], axis=1)
+    assert _sighted(points)[0] == pytest.approx([10.0, 1.6, -1.0])
+    # the ego driving at 10 m/s, no error: x 20, 19, ... on a fixed road place, y as before
+    ahead = np.stack([20.0 - 10.0 * t, 2.0 - t], axis=1)
+    assert _sighted(ahead, odometer=10.0 * t)[0] == pytest.approx([16.0, 1.6, -1.0])
+
+
+def test_a_sighting_riding_along_the_road_is_no_walker():
+    # the ego at 10 m/s, the object moving along at 4 m/s (its road place 20 + 4 t), drifting
+    # towards the path at 1 m/s: a cyclist, not a walker; at 1.5 m/s along, a walker
+    t = np.arange(5) * 0.1
+    for along, walks in ((4.0, False), (1.5, True)):
+        points = np.stack([20.0 + (along - 10.0) * t, 2.5 - t], axis=1)
+        out = _sighted(points, odometer=10.0 * t)
+        assert (out.shape[0] == 1) is walks, along
+        if walks:
+            assert out[0, 2] == pytest.approx(-1.0)
+
+
+def test_a_sighting_track_needs_five_positions_over_0_4_s_and_a_walking_speed():
+    t = np.arange(5) * 0.1
+    crossing = np.stack([10.0 + 0.0 * t, 2.0 - t], axis=1)
+    assert _sighted(crossing[:4]).shape == (0, 3)  # 0.3 s
+    assert _sighted(crossing, dt=0.09).shape == (0, 3)  # five over 0.36 s
+    assert _sighted(crossing).shape == (1, 3)
+    assert _sighted(np.stack([10.0 + 0.0 * t, 2.0 + 0.0 * t], axis=1)).shape == (0, 3)  # standing
+
+
+def test_sightings_join_within_the_depth_s_error_along_and_a_metre_across():
+    # the last sighting 20 m ahead, 2 m to the left (bearing 0.1): along the road a sighting
+    # joins within 1 m + 0.15 of its x, across within 1 m of the bearing at the last place
+    for x, y, joins in ((23.5, 2.0, True),    # 3.5 m farther: within 1 + 0.15 * 23.5 = 4.5 m
+                        (17.5, 2.0, True),    # 2.5 m nearer: within 1 + 0.15 * 17.5 = 3.6 m
+                        (16.0, 2.0, False),   # 4 m nearer: beyond 1 + 0.15 * 16 = 3.4 m
+                        (20.0, 2.9, True),    # 0.9 m across
+                        (20.0, 3.1, False)):  # 1.1 m across
+        tracks = SightingTracks()
+        tracks.update([[20.0, 2.0]], time=0.0, odometer=0.0)
+        tracks.update([[x, y]], time=0.1, odometer=0.0)
+        assert len(tracks._tracks) == (1 if joins else 2), (x, y)
+
+
+def test_sightings_must_lie_ahead():
+    with pytest.raises(ValueError, match=r"walkers x = \[0.0\]: sightings must lie ahead of the ego origin"):
+        SightingTracks().update([[0.0, 2.0]], time=0.0, odometer=0.0)
+    with pytest.raises(ValueError, match=r"walkers has shape \(1, 3\)"):
+        SightingTracks().update([[1.0, 2.0, 3.0]], time=0.0, odometer=0.0)
 
 
 @pytest.mark.parametrize("x, y, vy, speed, expected", [
