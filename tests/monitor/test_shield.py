@@ -329,6 +329,12 @@ def test_an_edge_of_the_path_is_confirmed_first():
         ShieldConfig(confirm_edge="thin")
 
 
+#: a wide object 15 m ahead of the bumper, within the emergency reach at 10 m/s (15.33 m), then
+#: 1 m nearer; and one in a new place each frame (left, then right of the centreline)
+WIDE = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
+FLICKER = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
+
+
 def _with_shares(name):
     """The decelerations a shield of ``config`` requests, at 10 m/s and a risk of 0.9, over
     ``frames`` of unseen objects, each frame with its ``name`` shares (emerged or contact)."""
@@ -343,28 +349,25 @@ def test_what_came_out_of_the_road_is_confirmed_first():
     asks = replace(STAGED, confirm_emerged=0.5)
     decelerations = _with_shares("emerged")
 
-    # a wide object 15 m ahead of the bumper, within the emergency reach at 10 m/s (15.33 m),
-    # then 1 m nearer: at once, unless half of it or more stood where the frames before saw the
+    # WIDE: at once, unless half of it or more stood where the frames before saw the
     # road; then only once it stood there in 2 of 3 frames
-    wide = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
-    assert decelerations(asks, wide, [[0.8], [0.8]]) == [0.0, 6.0]
-    assert decelerations(asks, wide, [[0.5], [0.0]]) == [0.0, 6.0]
+    assert decelerations(asks, WIDE, [[0.8], [0.8]]) == [0.0, 6.0]
+    assert decelerations(asks, WIDE, [[0.5], [0.0]]) == [0.0, 6.0]
     for known in ([0.49], [np.nan]):  # under the share, or not known: at once
-        assert decelerations(asks, wide[:1], [known]) == [6.0]
-    # out of the road in a new place each frame (left, then right of the centreline): never
-    flicker = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
-    assert decelerations(asks, flicker, [[1.0], [1.0]]) == [0.0, 0.0]
+        assert decelerations(asks, WIDE[:1], [known]) == [6.0]
+    # out of the road in a new place each frame: never
+    assert decelerations(asks, FLICKER, [[1.0], [1.0]]) == [0.0, 0.0]
     # not asked without the setting
-    assert decelerations(replace(asks, confirm_emerged=None), wide[:1], [[1.0]]) == [6.0]
+    assert decelerations(replace(asks, confirm_emerged=None), WIDE[:1], [[1.0]]) == [6.0]
     with pytest.raises(ValueError, match=r"emerged = \[0.5, 0.5\]: expected one share in \[0, 1\] \(or NaN\) per "
                                          r"row of unseen, shape \(1,\)"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[0.5, 0.5])
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, emerged=[0.5, 0.5])
     with pytest.raises(ValueError, match=r"emerged = \[1.5\]"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, emerged=[1.5])
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, emerged=[1.5])
     # not measured (a monitor whose config does not ask) is refused where there is a view
     with pytest.raises(ValueError, match=r"emerged = None: a shield that confirms what came out of the road "
                                          r"\(confirm_emerged = 0.5\) needs a share per unseen object"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0)
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0)
     assert Shield(asks).update(0.9, speed=10.0, unseen=None, time=0.0).cause == "no view"
     with pytest.raises(ValueError, match=r"confirm_emerged = 2.0, must be in \[0, 1\]"):
         ShieldConfig(confirm_emerged=2.0)
@@ -374,16 +377,14 @@ def test_what_touches_nothing_is_confirmed_first():
     asks = replace(STAGED, confirm_contact=0.5)
     decelerations = _with_shares("contact")
 
-    # a wide object within the emergency reach (as above): at once, unless it stands on the
-    # road in under half of its columns; then once it stood there in 2 of 3 frames
-    wide = [np.array([[3.8 + d, -1.0, 1.0]]) for d in (15.0, 14.0)]
-    assert decelerations(asks, wide, [[0.2], [0.2]]) == [0.0, 6.0]
-    assert decelerations(asks, wide, [[0.0], [1.0]]) == [0.0, 6.0]
+    # WIDE: at once, unless it stands on the road in under half of its columns; then
+    # once it stood there in 2 of 3 frames
+    assert decelerations(asks, WIDE, [[0.2], [0.2]]) == [0.0, 6.0]
+    assert decelerations(asks, WIDE, [[0.0], [1.0]]) == [0.0, 6.0]
     for measured in ([0.5], [1.0], [np.nan]):  # half of it or more on the road, or not measured: at once
-        assert decelerations(asks, wide[:1], [measured]) == [6.0]
-    # afloat in a new place each frame (left, then right of the centreline): never
-    flicker = [np.array([[3.8 + d, *side]]) for d, side in ((15.0, (-1.2, -0.3)), (14.0, (0.3, 1.2)))]
-    assert decelerations(asks, flicker, [[0.0], [0.0]]) == [0.0, 0.0]
+        assert decelerations(asks, WIDE[:1], [measured]) == [6.0]
+    # afloat in a new place each frame: never
+    assert decelerations(asks, FLICKER, [[0.0], [0.0]]) == [0.0, 0.0]
     # a sighting that floats confirms one that floats (a barrier's arm seen twice), and one that
     # stands (or cannot tell) one that stands: a narrow object, which is asked whatever its contact
     narrow = [np.array([[3.8 + d, -0.1, 0.1]]) for d in (15.0, 14.0)]
@@ -391,16 +392,16 @@ def test_what_touches_nothing_is_confirmed_first():
                               ([[0.0], [1.0]], 0.0), ([[0.0], [np.nan]], 0.0), ([[1.0], [0.0]], 0.0)):
         assert decelerations(asks, narrow, contact) == [0.0, expected]
     # not asked without the setting, and then what floats confirms what stands
-    assert decelerations(replace(asks, confirm_contact=None), wide[:1], [[0.0]]) == [6.0]
+    assert decelerations(replace(asks, confirm_contact=None), WIDE[:1], [[0.0]]) == [6.0]
     assert decelerations(replace(asks, confirm_contact=None), narrow, [[0.0], [1.0]]) == [0.0, 6.0]
     with pytest.raises(ValueError, match=r"contact = \[0.5, 0.5\]: expected one share in \[0, 1\] \(or NaN\) per "
                                          r"row of unseen, shape \(1,\) \(RiskReport.unseen_contact\)"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, contact=[0.5, 0.5])
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, contact=[0.5, 0.5])
     with pytest.raises(ValueError, match=r"contact = \[-0.1\]"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0, contact=[-0.1])
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, contact=[-0.1])
     with pytest.raises(ValueError, match=r"contact = None: a shield that confirms what touches nothing "
                                          r"\(confirm_contact = 0.5\) needs a share per unseen object"):
-        Shield(asks).update(0.9, speed=10.0, unseen=wide[0], time=0.0)
+        Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0)
     assert Shield(asks).update(0.9, speed=10.0, unseen=None, time=0.0).cause == "no view"
     with pytest.raises(ValueError, match=r"confirm_contact = 1.5, must be in \[0, 1\]"):
         ShieldConfig(confirm_contact=1.5)
