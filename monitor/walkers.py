@@ -11,26 +11,35 @@ and how fast she walks across the car's heading; :meth:`monitor.shield.Shield.up
 the shield for one walking into the path within its reach (``shield.walker_horizon``).
 
 Tracking is nearest-neighbour, as simple as a walker's motion over a second allows: a
-position joins the track whose last position (on the road) lies nearest within
-:data:`ASSOCIATION_M`, if that was seen within :data:`TRACK_GAP_S`; else it starts a track.
-A track's lateral speed is the least-squares slope of its lateral positions over the last
+position joins the track whose last position (on the road) lies nearest within the
+tolerances below, if that was seen within :data:`TRACK_GAP_S`; else it starts a track. A
+track's lateral speed is the least-squares slope of its lateral positions over the last
 :data:`TRACK_WINDOW_S` seconds, given once it holds :data:`MIN_POINTS` positions spanning
 :data:`MIN_SPAN_S` there; a speed outside :data:`WALKING_SPEED` is no walker's (standing
-still within the detector's noise, or two people joined into one track). The frames must
+still within the detector's noise), and neither is a track whose positions stray from its
+line by more than :data:`MAX_SPREAD_M` (two people joined into one track: on a sidewalk
+they walk in lines a metre apart, in both directions). The frames must
 come at 10 Hz or so (the closed loop's rate): at nuScenes' 2 Hz keyframes three positions
 span a whole second and a walker moves 0.5-1 m between them; hardly a track forms.
 
+A camera's distances err more than its bearings. A monocular 3D detector's distance is off
+by some per cent from frame to frame, a monocular depth's scale error changes from frame to
+frame, and either moves a position's ``x`` and ``y`` together along its line of sight: a
+walker 5 m beside the path, read 10 % too far, jumps 0.5 m across. So a track keeps each
+position's bearing ``y / x`` and puts all of them at one depth, the mean of its places
+along the road (a walker crossing the road stays at one place along it; over a few frames
+the mean errs less than any one reading, and less than a line fitted to them), and a
+position joins a track within :data:`ASSOCIATION_M` across its line of sight but
+:data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of its ``x`` along the road.
+
 :class:`SightingTracks` follows the depth view's unseen objects that could be walkers in
 the same way (``shield.unseen_walkers``): a walker the detector misses is still seen by the
-depth view once she is in its corridor. Their positions need two things more. A monocular
-depth's scale error changes from frame to frame and moves an object's ``x`` and ``y``
-together along its line of sight (a post 2.5 m beside the path jumps 0.15 m across with a
-6 % error), so a track keeps each sighting's bearing ``y / x`` and puts all of them at one
-depth: a straight line fitted to the track's road positions over time. And an object riding
-along the road (a cyclist the detector missed) turns its bearing too, as a walker would, so
-a track whose fitted speed along the road exceeds :data:`MAX_ALONG_SPEED` is nobody walking
-across; the line needs more sightings over a longer time to tell
-(:data:`SIGHTING_MIN_POINTS`, :data:`SIGHTING_MIN_SPAN_S`).
+depth view once she is in its corridor. What it sees has no class to tell a walker by. The
+end of a parked car or a post beside the path stands still, so a sighting track needs more
+positions over a longer time (:data:`SIGHTING_MIN_POINTS`, :data:`SIGHTING_MIN_SPAN_S`); and
+an object riding along the road (a cyclist the detector missed) turns its bearing too, as a
+walker would, so a sighting track whose speed along the road (the least-squares slope of
+its places over time) exceeds :data:`MAX_ALONG_SPEED` is nobody walking across.
 """
 from __future__ import annotations
 
@@ -54,14 +63,17 @@ MIN_SPAN_S = 0.15
 WALKING_SPEED = (0.3, 3.0)
 #: metres: half a walker's width, beyond her box's centre
 BODY_HALF_WIDTH = 0.3
+#: metres: the most a track's lateral positions may stray from their fitted line (root mean
+#: square): half a walker's width; more is two people joined into one track
+MAX_SPREAD_M = BODY_HALF_WIDTH
 #: the share of an unseen object's columns that must stand on the road
 #: (:attr:`monitor.RiskReport.unseen_contact`) for the depth view's sighting to be a walker's
 #: (``shield.unseen_walkers``): a walker meets the road at her feet; a blob of the depth floats
 STANDING_CONTACT = 0.5
-#: :class:`SightingTracks`: the share of its ``x`` by which a sighting's road position may
-#: lie from its track's last one (the depth's error, on top of :data:`ASSOCIATION_M`) ...
+#: the share of its ``x`` by which a position's place along the road may lie from its
+#: track's last one (the distance's error, on top of :data:`ASSOCIATION_M`)
 DEPTH_TOLERANCE = 0.15
-#: ... the positions a track needs in its window, the seconds they must span ...
+#: :class:`SightingTracks`: the positions a track needs in its window, the seconds they span ...
 SIGHTING_MIN_POINTS = 5
 SIGHTING_MIN_SPAN_S = 0.4
 #: ... and the fastest it may move along the road, m/s (a cyclist rides faster)
@@ -71,7 +83,8 @@ MAX_ALONG_SPEED = 2.0
 def walker_positions(boxes3d: np.ndarray, classes: np.ndarray, scores: np.ndarray,
                      min_score: float) -> np.ndarray:
     """Where the detector's walkers stand: the ``x, y`` (ego frame, metres) of the boxes of
-    a class in :data:`WALKER_CLASSES` scoring ``min_score`` or more.
+    a class in :data:`WALKER_CLASSES` scoring ``min_score`` or more, ahead of the ego origin
+    (``x > 0``; one beside or behind the car steps into no path ahead of it).
 
     Parameters
     ----------
@@ -85,12 +98,14 @@ def walker_positions(boxes3d: np.ndarray, classes: np.ndarray, scores: np.ndarra
     -------
     ndarray of shape (k, 2), float64
     """
-    walking = np.isin(np.asarray(classes), WALKER_CLASSES) & (np.asarray(scores) >= min_score)
-    return np.asarray(boxes3d, dtype=np.float64).reshape(-1, 7)[walking, :2]
+    boxes3d = np.asarray(boxes3d, dtype=np.float64).reshape(-1, 7)
+    walking = np.isin(np.asarray(classes), WALKER_CLASSES) & (np.asarray(scores) >= min_score) & (boxes3d[:, 0] > 0)
+    return boxes3d[walking, :2]
 
 
 class WalkerTracks:
-    """The detector's walkers, followed on the road from frame to frame.
+    """The detector's walkers, followed on the road from frame to frame (module docstring):
+    their bearings put at one depth, the mean of their places along the road.
 
     Examples
     --------
@@ -110,7 +125,8 @@ class WalkerTracks:
         Parameters
         ----------
         walkers : array_like of shape (k, 2)
-            ``x, y`` of the frame's walkers (ego frame, metres; :func:`walker_positions`).
+            ``x, y`` of the frame's walkers (ego frame, metres, ``x > 0``;
+            :func:`walker_positions`).
         time : float
             The frame's time, seconds, increasing.
         odometer : float
@@ -119,14 +135,13 @@ class WalkerTracks:
         Returns
         -------
         ndarray of shape (n, 3), float64
-            Per walking track: ``x`` now (ego frame: the median of its road places here,
-            their fitted line's for :class:`SightingTracks`), ``y`` now (the fitted line's),
-            lateral speed (m/s, positive leftwards).
+            Per walking track: ``x`` now (ego frame: the mean of its road places), ``y`` now
+            (the fitted line's), lateral speed (m/s, positive leftwards).
 
         Raises
         ------
         ValueError
-            ``walkers`` not finite (k, 2) rows.
+            ``walkers`` not finite (k, 2) rows, or one at ``x <= 0``.
         """
         walkers = np.asarray(walkers, dtype=np.float64)
         if walkers.size == 0:
@@ -134,6 +149,9 @@ class WalkerTracks:
         if walkers.ndim != 2 or walkers.shape[1] != 2 or not np.isfinite(walkers).all():
             raise ValueError(f"walkers has shape {walkers.shape}: expected finite (k, 2) rows x, y "
                              "(ego frame, metres; monitor.walkers.walker_positions)")
+        if not (walkers[:, 0] > 0).all():
+            raise ValueError(f"walkers x = {walkers[:, 0].tolist()}: positions must lie ahead of the ego "
+                             "origin, x > 0 metres")
         live = [t for t in self._tracks if time - t[-1][0] <= TRACK_GAP_S]
         extended = set()
         for x, y in walkers.tolist():
@@ -163,39 +181,49 @@ class WalkerTracks:
 
     #: positions (in the window) a track needs before it has a speed, and the seconds they span
     min_points, min_span = MIN_POINTS, MIN_SPAN_S
+    #: m/s: the fastest a walking track may move along the road (the detector's class says
+    #: who walks)
+    max_along = math.inf
 
     @staticmethod
     def _row(time: float, x: float, y: float, odometer: float) -> tuple:
-        """What a track keeps of a position: ``time``, its place along the road, ``y``."""
-        return time, x + odometer, y
+        """What a track keeps of a position: ``time``, its place along the road, its bearing
+        ``y / x`` and ``x``."""
+        return time, x + odometer, y / x, x
 
     @staticmethod
     def _distance(last: tuple, x: float, y: float, odometer: float) -> float:
-        """How far a position lies from a track's ``last`` row, metres (inf: too far to join)."""
-        d = math.hypot(last[1] - (x + odometer), last[2] - y)
-        return d if d <= ASSOCIATION_M else math.inf
+        """How far a position lies from a track's ``last`` row, in tolerances (inf: too far):
+        along the road in units of :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of
+        ``x``, across it (the last bearing at the last road place, seen from here) in
+        :data:`ASSOCIATION_M`."""
+        along = abs(last[1] - (x + odometer)) / (ASSOCIATION_M + DEPTH_TOLERANCE * x)
+        across = abs(last[2] * (last[1] - odometer) - y) / ASSOCIATION_M
+        return math.hypot(along, across) if along <= 1.0 and across <= 1.0 else math.inf
 
-    @staticmethod
-    def _motion(rows: np.ndarray, time: float, odometer: float) -> tuple | None:
-        """A track's ``x, y, lateral speed`` now from its rows (n, 3), None if it does not
-        walk: the least-squares line of ``y`` over time; ``x``, the median road place."""
-        t, x, y = rows.T
+    @classmethod
+    def _motion(cls, rows: np.ndarray, time: float, odometer: float) -> tuple | None:
+        """``x, y, lateral speed`` now from rows (n, 4), None if it does not walk: each
+        position's depth is the mean road place less the odometer then, and its bearing put
+        at that depth gives its ``y``; the least-squares line of ``y`` over time gives ``y``
+        now and the lateral speed, and the ``y`` must lie near it (:data:`MAX_SPREAD_M`)."""
+        t, road, bearing, x = rows.T
+        place = road.mean()
+        along = np.polyfit(t - time, road, 1)[0]
+        y = bearing * (place - (road - x))  # road - x: the odometer then
         speed, now = np.polyfit(t - time, y, 1)
-        if WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1]:
-            return float(np.median(x)) - odometer, float(now), float(speed)
+        spread = math.sqrt(np.mean((y - now - speed * (t - time)) ** 2))
+        if spread <= MAX_SPREAD_M and WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1] \
+                and abs(along) <= cls.max_along:
+            return float(place) - odometer, float(now), float(speed)
         return None
 
 
 class SightingTracks(WalkerTracks):
-    """The depth view's sightings of what could be a walker, followed on the road.
-
-    As :class:`WalkerTracks`, but a sighting joins a track whose last road position lies
-    within :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of its ``x`` along the road
-    and within :data:`ASSOCIATION_M` across it (its last bearing at this sighting's depth),
-    and a track's positions are its bearings put at one depth, a line fitted to its road
-    positions over time; a track moving along the road faster than
-    :data:`MAX_ALONG_SPEED` does not walk (module docstring). ``update`` takes sightings
-    ahead of the ego origin (``x > 0``).
+    """The depth view's sightings of what could be a walker, followed on the road as
+    :class:`WalkerTracks` follows the detector's walkers; a track needs
+    :data:`SIGHTING_MIN_POINTS` sightings over :data:`SIGHTING_MIN_SPAN_S` and moves along
+    the road no faster than :data:`MAX_ALONG_SPEED` (module docstring).
 
     Examples
     --------
@@ -205,48 +233,11 @@ class SightingTracks(WalkerTracks):
     ...     moving = tracks.update([[s * (20.0 - k), s * (2.5 - 0.1 * k)]], time=0.1 * k,
     ...                            odometer=float(k))
     >>> moving.round(2).tolist()
-    [[14.85, 1.98, -1.1]]
+    [[15.04, 2.01, -1.0]]
     """
 
     min_points, min_span = SIGHTING_MIN_POINTS, SIGHTING_MIN_SPAN_S
-
-    def update(self, walkers, time: float, odometer: float) -> np.ndarray:
-        """As :meth:`WalkerTracks.update`, for the sightings ``walkers`` (k, 2) ``x, y``;
-        ValueError for one at ``x <= 0`` too."""
-        walkers = np.asarray(walkers, dtype=np.float64)
-        if walkers.ndim == 2 and walkers.shape[1] == 2 and np.isfinite(walkers).all() \
-                and not (walkers[:, 0] > 0).all():
-            raise ValueError(f"walkers x = {walkers[:, 0].tolist()}: sightings must lie ahead of the ego "
-                             "origin, x > 0 metres")
-        return super().update(walkers, time, odometer)
-
-    @staticmethod
-    def _row(time: float, x: float, y: float, odometer: float) -> tuple:
-        """``time``, the road place, the bearing ``y / x`` and ``x``."""
-        return time, x + odometer, y / x, x
-
-    @staticmethod
-    def _distance(last: tuple, x: float, y: float, odometer: float) -> float:
-        """How far a sighting lies from a track's ``last`` row, in tolerances (inf: too far):
-        along the road in units of :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of
-        ``x``, across it (the last bearing at the last road place, seen from here) in
-        :data:`ASSOCIATION_M`."""
-        along = abs(last[1] - (x + odometer)) / (ASSOCIATION_M + DEPTH_TOLERANCE * x)
-        across = abs(last[2] * (last[1] - odometer) - y) / ASSOCIATION_M
-        return math.hypot(along, across) if along <= 1.0 and across <= 1.0 else math.inf
-
-    @staticmethod
-    def _motion(rows: np.ndarray, time: float, odometer: float) -> tuple | None:
-        """``x, y, lateral speed`` now from rows (n, 4), None if it does not walk: the road
-        place's least-squares line over time gives each sighting's depth, and the bearings
-        put at those depths the line of ``y``."""
-        t, road, bearing, x = rows.T
-        along, place = np.polyfit(t - time, road, 1)
-        depth = along * (t - time) + place - (road - x)  # road - x: the odometer then
-        speed, now = np.polyfit(t - time, bearing * depth, 1)
-        if WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1] and abs(along) <= MAX_ALONG_SPEED:
-            return float(place) - odometer, float(now), float(speed)
-        return None
+    max_along = MAX_ALONG_SPEED
 
 
 def entering(tracks: np.ndarray, half_width: float, front: float, speed: float, horizon: float) -> np.ndarray:

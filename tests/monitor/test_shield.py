@@ -541,13 +541,15 @@ def test_each_decision_says_why():
 WATCHES = replace(STAGED, walker_horizon=1.0, unseen_walkers=None)  # hold 2 frames, emergency 6 m/s^2, walkers within 1 s
 
 
-def _crossing(config, x0, vy, frames, speed=8.0):
+def _crossing(config, x0, vy, frames, speed=8.0, scale=(1.0,)):
     """Decisions for a walker standing on the road ``x0`` m ahead of the ego origin at the
     start, 4 m to the left, walking across at ``vy`` m/s; the ego at ``speed``, 0.1 s frames,
-    risk 0, nothing unseen."""
+    risk 0, nothing unseen. The detector reads her ``x`` and ``y`` times ``scale[k % n]``
+    (its distance's error, along her line of sight)."""
     shield = Shield(config)
     return [shield.update(0.0, speed=speed, unseen=np.zeros((0, 3)), time=0.1 * k,
-                          walkers=[[x0 - speed * 0.1 * k, 4.0 + vy * 0.1 * k]]) for k in range(frames)]
+                          walkers=[[scale[k % len(scale)] * (x0 - speed * 0.1 * k),
+                                    scale[k % len(scale)] * (4.0 + vy * 0.1 * k)]]) for k in range(frames)]
 
 
 def test_a_walker_stepping_into_the_path_engages_when_her_line_reaches_it():
@@ -568,6 +570,19 @@ def test_a_walker_stepping_into_the_path_engages_when_her_line_reaches_it():
     # 30 m: 20.6 m ahead at k = 7, beyond the reach: not yet (at k = 12, 16.6 m, she is 0.65 m
     # from the path, within the horizon: then)
     assert [d.engaged for d in _crossing(WATCHES, 30.0, -1.5, 13)] == [False] * 12 + [True]
+
+
+def test_a_walker_the_detector_reads_too_far_or_too_near_engages_as_one_read_exactly():
+    # a monocular detector's distance errs by some per cent from frame to frame (the
+    # generator's: 2.5 % + 0.25 % per metre, one sigma, in nominal scenes); read 8 % too far,
+    # 6 % too near, 3 % too far, 4 % too near in turn, her positions jump 1-3 m along the road
+    # and 0.2-0.5 m across, yet her track engages from k = 7 as the exact one's does, where her
+    # bearings put at the mean of her road places say she stands: 18.48 m ahead of the ego
+    # origin (25.92, 22.608, 24.672, 23.136, 25.664, 22.8, 24.576, 23.264 on the road at
+    # k = 0 .. 7: mean 24.08; less the odometer, 5.6)
+    decisions = _crossing(WATCHES, 24.0, -1.5, 9, scale=(1.08, 0.94, 1.03, 0.96))
+    assert [d.engaged for d in decisions] == [False] * 7 + [True, True]
+    assert decisions[7].objects[0][0] == pytest.approx(18.48)
 
 
 def test_a_walker_along_the_kerb_or_walking_away_engages_nothing():
