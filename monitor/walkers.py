@@ -18,9 +18,9 @@ track's lateral speed is the least-squares slope of its lateral positions over t
 :data:`MIN_SPAN_S` there; a speed outside :data:`WALKING_SPEED` is no walker's (standing
 still within the detector's noise), and neither is a track whose positions stray from its
 line by more than :data:`MAX_SPREAD_M` (two people joined into one track: on a sidewalk
-they walk in lines a metre apart, in both directions). The frames must
-come at 10 Hz or so (the closed loop's rate): at nuScenes' 2 Hz keyframes three positions
-span a whole second and a walker moves 0.5-1 m between them; hardly a track forms.
+they walk in lines a metre apart, in both directions). The frames must come at 10 Hz or so
+(the closed loop's rate): at nuScenes' 2 Hz keyframes three positions span a whole second
+and a walker moves 0.5-1 m between them; hardly a track forms.
 
 A camera's distances err more than its bearings. A monocular 3D detector's distance is off
 by some per cent from frame to frame, a monocular depth's scale error changes from frame to
