@@ -575,8 +575,8 @@ def test_a_walker_stepping_into_the_path_engages_when_her_line_reaches_it():
 def test_a_walker_the_detector_reads_too_far_or_too_near_engages_as_one_read_exactly():
     # a monocular detector's distance errs by some per cent from frame to frame (the
     # generator's: 2.5 % + 0.25 % per metre, one sigma, in nominal scenes); read 8 % too far,
-    # 6 % too near, 3 % too far, 4 % too near in turn, her positions jump 1-3 m along the road
-    # and 0.2-0.5 m across, yet her track engages from k = 7 as the exact one's does, where her
+    # 6 % too near, 3 % too far, 4 % too near in turn, her positions jump 1.5-3.3 m along the
+    # road and 0.2-0.7 m across, yet her track engages from k = 7 as the exact one's does, where her
     # bearings put at the mean of her road places say she stands: 18.48 m ahead of the ego
     # origin (25.92, 22.608, 24.672, 23.136, 25.664, 22.8, 24.576, 23.264 on the road at
     # k = 0 .. 7: mean 24.08; less the odometer, 5.6)
