@@ -285,8 +285,8 @@ class Shield:
             that confirms with ``confirm_emerged`` refuses for a frame with a view. Read
             only by such a gate.
         walkers : ndarray of shape (w, 2), optional
-            ``x, y`` (ego frame, metres) of the walkers the detector reports in the frame
-            (:func:`monitor.walkers.walker_positions`); needed with ``walker_horizon``,
+            ``x, y`` (ego frame, metres, ``x > 0``) of the walkers the detector reports in the
+            frame (:func:`monitor.walkers.walker_positions`); needed with ``walker_horizon``,
             which refuses None, and read only then.
         contact : ndarray of shape (k,), optional
             The report's :attr:`~monitor.RiskReport.unseen_contact`: one share in [0, 1] (or
