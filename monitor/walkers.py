@@ -28,9 +28,11 @@ frame, and either moves a position's ``x`` and ``y`` together along its line of 
 walker 5 m beside the path, read 10 % too far, jumps 0.5 m across. So a track keeps each
 position's bearing ``y / x`` and puts all of them at one depth, the mean of its places
 along the road (a walker crossing the road stays at one place along it; over a few frames
-the mean errs less than any one reading, and less than a line fitted to them), and a
-position joins a track within :data:`ASSOCIATION_M` across its line of sight but
-:data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of its ``x`` along the road.
+the mean errs less than any one reading, and less than a line fitted to them). A position
+joins a track within :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of its ``x`` along
+the road, and within :data:`ASSOCIATION_M` across it, its bearing and the track's last one
+both put at the track's depth: a walker's place across the road does not move as the car
+comes nearer, nor with a reading's distance error.
 
 :class:`SightingTracks` follows the depth view's unseen objects that could be walkers in
 the same way (``shield.unseen_walkers``): a walker the detector misses is still seen by the
@@ -159,7 +161,7 @@ class WalkerTracks:
             for i, track in enumerate(live):
                 if i in extended:
                     continue
-                d = self._distance(track[-1], x, y, odometer)
+                d = self._distance(track, x, y, odometer)
                 if math.isfinite(d) and d <= nearest:
                     best, nearest = i, d
             if best is None:
@@ -192,13 +194,17 @@ class WalkerTracks:
         return time, x + odometer, y / x, x
 
     @staticmethod
-    def _distance(last: tuple, x: float, y: float, odometer: float) -> float:
-        """How far a position lies from a track's ``last`` row, in tolerances (inf: too far):
-        along the road in units of :data:`ASSOCIATION_M` plus :data:`DEPTH_TOLERANCE` of
-        ``x``, across it (the last bearing at the last road place, seen from here) in
-        :data:`ASSOCIATION_M`."""
+    def _distance(track: list, x: float, y: float, odometer: float) -> float:
+        """How far a position lies from a ``track`` (its rows), in tolerances (inf: too far):
+        along the road from its last place, in units of :data:`ASSOCIATION_M` plus
+        :data:`DEPTH_TOLERANCE` of ``x``; across it in :data:`ASSOCIATION_M`, the position's
+        bearing and the track's last one both put at the track's depth (the mean of its road
+        places), as :meth:`_motion` puts them."""
+        last = track[-1]
+        place = sum(row[1] for row in track) / len(track)
         along = abs(last[1] - (x + odometer)) / (ASSOCIATION_M + DEPTH_TOLERANCE * x)
-        across = abs(last[2] * (last[1] - odometer) - y) / ASSOCIATION_M
+        # last[1] - last[3]: the odometer when the last position was read
+        across = abs(last[2] * (place - (last[1] - last[3])) - y / x * (place - odometer)) / ASSOCIATION_M
         return math.hypot(along, across) if along <= 1.0 and across <= 1.0 else math.inf
 
     @classmethod

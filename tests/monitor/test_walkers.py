@@ -144,8 +144,9 @@ def test_a_sighting_riding_along_the_road_is_no_walker_a_detected_one_is(tracks,
 
 @pytest.mark.parametrize("tracks", [WalkerTracks, SightingTracks])
 def test_positions_join_within_the_distance_s_error_along_and_a_metre_across(tracks):
-    # the last position 20 m ahead, 2 m to the left (bearing 0.1): along the road a position
-    # joins within 1 m + 0.15 of its x, across within 1 m of the bearing at the last place
+    # the last position 20 m ahead, 2 m to the left (bearing 0.1), the ego at rest: along the
+    # road a position joins within 1 m + 0.15 of its x; across within 1 m, its bearing put at
+    # the track's depth, 20 m (23.5, 2.0: 1.70 m; 17.5, 2.0: 2.29 m)
     for x, y, joins in ((23.5, 2.0, True),    # 3.5 m farther: within 1 + 0.15 * 23.5 = 4.5 m
                         (17.5, 2.0, True),    # 2.5 m nearer: within 1 + 0.15 * 17.5 = 3.6 m
                         (16.0, 2.0, False),   # 4 m nearer: beyond 1 + 0.15 * 16 = 3.4 m
@@ -155,6 +156,26 @@ def test_positions_join_within_the_distance_s_error_along_and_a_metre_across(tra
         followed.update([[20.0, 2.0]], time=0.0, odometer=0.0)
         followed.update([[x, y]], time=0.1, odometer=0.0)
         assert len(followed._tracks) == (1 if joins else 2), (x, y)
+
+
+@pytest.mark.parametrize("tracks", [WalkerTracks, SightingTracks])
+def test_across_the_road_both_bearings_are_put_at_the_track_s_depth(tracks):
+    # a walker standing 7 m to the left of the path, 20 m ahead (the ego at rest), read 15 %
+    # too far: (23.0, 8.05), 1.05 m farther out where it was read, but its bearing
+    # 8.05 / 23 = 0.35 at the track's 20 m is 7 m again: the same track
+    followed = tracks()
+    followed.update([[20.0, 7.0]], time=0.0, odometer=0.0)
+    followed.update([[23.0, 8.05]], time=0.1, odometer=0.0)
+    assert len(followed._tracks) == 1
+    # two people standing 1.2 m apart across, 12 m along the road (road place 12), the ego
+    # coming at 5 m/s: the outer one read at t = 0, 0.1 (y -5.4), then only the inner one
+    # at t = 0.4, 0.5, 0.6 (y -4.2). At the track's depth they stay 1.2 m apart: two tracks,
+    # each standing, no walker. (Her last bearing seen at the car's new place, -5.4 / 11.5 *
+    # 10 = -4.7 m, lay within a metre of the inner one: a track walking 2.4 m/s towards the path.)
+    followed, out = tracks(), None
+    for t, y in ((0.0, -5.4), (0.1, -5.4), (0.4, -4.2), (0.5, -4.2), (0.6, -4.2)):
+        out = followed.update([[12.0 - 5.0 * t, y]], time=t, odometer=5.0 * t)
+    assert len(followed._tracks) == 2 and out.shape == (0, 3)
 
 
 # ------------------------------------------------------------------- the depth view's sightings
