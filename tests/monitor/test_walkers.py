@@ -145,8 +145,8 @@ def test_a_sighting_riding_along_the_road_is_no_walker_a_detected_one_is(tracks,
 @pytest.mark.parametrize("tracks", [WalkerTracks, SightingTracks])
 def test_positions_join_within_the_distance_s_error_along_and_a_metre_across(tracks):
     # the last position 20 m ahead, 2 m to the left (bearing 0.1), the ego at rest: along the
-    # road a position joins within 1 m + 0.15 of its x; across within 1 m, its bearing put at
-    # the track's depth, 20 m (23.5, 2.0: 1.70 m; 17.5, 2.0: 2.29 m)
+    # road a position joins within 1 m + 0.15 of its x; across within 1 m of 2 m, its bearing
+    # put at the track's depth, 20 m ((23.5, 2.0) lies at 1.70 m there, (17.5, 2.0) at 2.29 m)
     for x, y, joins in ((23.5, 2.0, True),    # 3.5 m farther: within 1 + 0.15 * 23.5 = 4.5 m
                         (17.5, 2.0, True),    # 2.5 m nearer: within 1 + 0.15 * 17.5 = 3.6 m
                         (16.0, 2.0, False),   # 4 m nearer: beyond 1 + 0.15 * 16 = 3.4 m
