@@ -215,14 +215,14 @@ class WalkerTracks:
         now and the lateral speed, and the ``y`` must lie near it (:data:`MAX_SPREAD_M`)."""
         t, road, bearing, x = rows.T
         place = road.mean()
-        along = np.polyfit(t - time, road, 1)[0]
         y = bearing * (place - (road - x))  # road - x: the odometer then
         speed, now = np.polyfit(t - time, y, 1)
         spread = math.sqrt(np.mean((y - now - speed * (t - time)) ** 2))
-        if spread <= MAX_SPREAD_M and WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1] \
-                and abs(along) <= cls.max_along:
-            return float(place) - odometer, float(now), float(speed)
-        return None
+        if spread > MAX_SPREAD_M or not WALKING_SPEED[0] <= abs(speed) <= WALKING_SPEED[1]:
+            return None
+        if math.isfinite(cls.max_along) and abs(np.polyfit(t - time, road, 1)[0]) > cls.max_along:
+            return None  # riding along the road
+        return float(place) - odometer, float(now), float(speed)
 
 
 class SightingTracks(WalkerTracks):
