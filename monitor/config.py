@@ -296,7 +296,7 @@ class ShieldConfig:
     confirm_near: float | None = 2.5
     confirm_edge: float | None = None
     confirm_emerged: float | None = None
-    confirm_contact: float | None = None
+    confirm_contact: float | None = 0.5
     memory: float | None = 1.0
     walker_horizon: float | None = 1.0
     unseen_walkers: float | None = 1.0

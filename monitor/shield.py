@@ -71,8 +71,8 @@ saw the road farther on. Such a patch, wide and within the emergency reach, is w
 at-once rule brakes hardest for; an obstacle that the network blended into the road in
 both frames before is confirmed when it is seen again.
 
-With ``confirm_contact`` an object that touches nothing must be confirmed too, wherever it
-stands: one that stands on the road, or on something in front of it, in fewer than that
+With ``confirm_contact`` (0.5 by default) an object that touches nothing must be confirmed
+too, wherever it stands: one that stands on the road, or on something in front of it, in fewer than that
 share of its columns (``contact``, :attr:`monitor.RiskReport.unseen_contact`). What stands
 on the road meets it along its width (a walker at her feet, a car at its wheels and
 bumper, debris all along); a blob of the depth read too near in one frame hangs in the air,
