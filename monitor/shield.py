@@ -72,16 +72,17 @@ at-once rule brakes hardest for; an obstacle that the network blended into the r
 both frames before is confirmed when it is seen again.
 
 With ``confirm_contact`` (0.5 by default) an object that touches nothing must be confirmed
-too, wherever it stands: one that stands on the road, or on something in front of it, in fewer than that
-share of its columns (``contact``, :attr:`monitor.RiskReport.unseen_contact`). What stands
-on the road meets it along its width (a walker at her feet, a car at its wheels and
-bumper, debris all along); a blob of the depth read too near in one frame hangs in the air,
-the road beneath it seen farther. The view keeps an upright object that touches nothing (the
-raised rear of a trailer, a barrier's arm), and such a thing stands there in the next
-frame too; the blob does not. A sighting that floats then confirms only one that floats,
-and one that stands (or cannot tell: nothing valid beneath it) only one that stands: two
-blobs in two frames are not one object, and neither is a blob in one frame and a patch read
-too near at the image's bottom edge in the next.
+too, wherever it stands: one that stands on the road, or on something in front of it, in
+fewer than that share of its columns (``contact``,
+:attr:`monitor.RiskReport.unseen_contact`). What stands on the road meets it along its
+width (a walker at her feet, a car at its wheels and bumper, debris all along); a blob of
+the depth read too near in one frame hangs in the air, the road beneath it seen farther.
+The view keeps an upright object that touches nothing (the raised rear of a trailer, a
+barrier's arm), and such a thing stands there in the next frame too; the blob does not. A
+sighting that floats then confirms only one that floats, and one that stands (or cannot
+tell: nothing valid beneath it) only one that stands: two blobs in two frames are not one
+object, and neither is a blob in one frame and a patch read too near at the image's bottom
+edge in the next.
 
 With ``memory`` the gate remembers where the unseen objects that engaged it stand, on the
 road (the ego's travel, integrated from its speed, taken off their distance), for
