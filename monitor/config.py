@@ -243,9 +243,9 @@ class ShieldConfig:
         (:meth:`monitor.RiskMonitor.emerged`, the geometric view's rule 9) counts only once
         confirmed, wherever it stands. Something standing on the road was in view a frame
         before (or hidden, or beside its place); a patch of road the depth reads too near
-        comes out of the road. None: not asked. Needs the geometric view
-        (``retrieval.method: geometric``); the monitor keeps each frame's blocks for it
-        only when it is set.
+        comes out of the road. None: not asked. The paper's view does not see the road: its
+        objects are not measured (NaN), and what is not measured is not asked. The geometric
+        view keeps each frame's blocks for it only when it is set.
     confirm_contact : float in [0, 1] or None
         With a path gate that confirms: an unseen object that stands on the road (or on
         something in front of it) in fewer than this share of its columns
@@ -409,10 +409,6 @@ class MonitorConfig:
         for name in ("retrieval", "visibility"):
             if getattr(self, name).max_range != max_range:
                 _set(self, name, replace(getattr(self, name), max_range=max_range))
-        if self.shield.confirm_emerged is not None and self.retrieval.method != "geometric":
-            raise ValueError(f"shield.confirm_emerged = {self.shield.confirm_emerged:g} needs retrieval.method "
-                             f"geometric, not {self.retrieval.method!r}: only the geometric view sees where "
-                             "the road was (set confirm_emerged: null for the paper's view)")
 
 
 # ----------------------------------------------------------------------------- reading

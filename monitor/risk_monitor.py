@@ -325,13 +325,18 @@ class RiskMonitor:
         -------
         ndarray of shape (k,) or None
             One share per row of ``report.unseen``, NaN where no frame before can tell (a
-            first frame, frames without a view, too little of the object in their images);
-            None where ``report.unseen`` is None, and for every report of a monitor whose
-            shield does not confirm what came out of the road (``shield.confirm_emerged``
-            None: it keeps no blocks to measure it with; the paper's view never does).
+            first frame, frames without a view, too little of the object in their images)
+            and for every object of the paper's view, which does not see the road (not
+            measured, so not asked). None where ``report.unseen`` is None, and for every
+            report of a geometric view that keeps no blocks to measure it with (a monitor
+            whose shield does not confirm what came out of the road, ``shield.confirm_emerged``
+            None), which a shield that confirms it refuses.
         """
-        measured = isinstance(self._retriever, GeometricRetriever) and self._retriever.keep_blocks
-        return unseen_emerged(report, earlier, self._retriever if measured else None)
+        if isinstance(self._retriever, GeometricRetriever):
+            if not self._retriever.keep_blocks:
+                return None
+            return unseen_emerged(report, earlier, self._retriever)
+        return unseen_emerged(report, earlier, None)
 
     def _invalid(self, reason: str, timings: dict) -> RiskReport:
         return RiskReport(risk=self.config.risk.fail_safe, status=INVALID_INPUT, reason=reason,
@@ -494,16 +499,22 @@ def shift_earlier(earlier, report: RiskReport, moved: float) -> tuple[list, list
 def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
     """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever``, for code that
     has the reports but not the monitor (the dataset run's output, which replays the shield
-    in frame order). ``retriever`` None: nothing is measured (None), as for the paper's view
-    and a monitor whose shield does not confirm what came out of the road."""
+    in frame order). ``retriever`` None: the reports are the paper's view's, which does not
+    see the road: NaN per unseen object (not measured); a report that carries the geometric
+    view's road (``road_depth``) is refused then."""
     if not isinstance(report, RiskReport):
         raise ValueError(f"report is a {type(report).__name__}, expected a RiskReport")
     for k, pair in enumerate(earlier):
         if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], RiskReport)):
             raise ValueError(f"earlier[{k}] is a {type(pair).__name__}, expected a (RiskReport, travel in "
                              "metres) pair")
-    if report.unseen is None or retriever is None:
+    if report.unseen is None:
         return None
+    if retriever is None:
+        if report.road_depth is not None:
+            raise ValueError("report carries the geometric view's road (road_depth): its emerged shares need "
+                             "that view's retriever, not None")
+        return np.full(len(report.unseen), np.nan)
     if len(report.unseen_points) != len(report.unseen):
         raise ValueError(f"report has {len(report.unseen)} unseen objects and the blocks of "
                          f"{len(report.unseen_points)}: its monitor keeps them only when its config sets "

@@ -282,7 +282,7 @@ class Shield:
             (``walker_horizon``), ignored otherwise.
         emerged : ndarray of shape (k,), optional
             :meth:`monitor.RiskMonitor.emerged` of the frame's report: one share in [0, 1]
-            (or NaN: not known) per row of ``unseen``; None: not measured, which a path gate
+            (or NaN: not known) per row of ``unseen``; None: not given, which a path gate
             that confirms with ``confirm_emerged`` refuses for a frame with a view. Read
             only by such a gate.
         walkers : ndarray of shape (w, 2), optional

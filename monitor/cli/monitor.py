@@ -75,7 +75,8 @@ def run(args: argparse.Namespace) -> int:
     config = load_config(args.config)
     selection = select_scenes(args, None)
     spec = run_spec(args, selection, config, rules=args.rules or shipped_rules(), explain=not args.no_explain)
-    measured = config.shield.confirm_emerged is not None  # the workers' views keep their blocks
+    # the workers' geometric views keep their blocks; the paper's view measures nothing
+    measured = config.shield.confirm_emerged is not None and config.retrieval.method == "geometric"
     output = RunOutput(args.out, describe(args, spec, selection), selection.scenes, config.shield,
                        overwrite=args.overwrite,
                        retriever=GeometricRetriever(spec.camera, config.retrieval.geometric) if measured else None)

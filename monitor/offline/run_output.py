@@ -172,8 +172,9 @@ class RunOutput:
         Start afresh even when ``out`` holds a run (its files are removed first).
     retriever : GeometricRetriever, optional
         The run's geometric view (its camera and configuration), for the unseen objects'
-        emerged shares, given when the shield confirms what came out of the road (the
-        monitors' views then keep their blocks); None: no shares (``emerged`` null).
+        emerged shares when the shield confirms what came out of the road (the monitors'
+        views then keep their blocks). None for the paper's view: the shares are NaN (not
+        measured). A shield that does not confirm it gets none (``emerged`` null).
 
     Raises
     ------
@@ -188,6 +189,7 @@ class RunOutput:
                  *, overwrite: bool = False, retriever: GeometricRetriever | None = None):
         self.out = Path(out)
         self.retriever = retriever
+        self.measure_emerged = shield.confirm_emerged is not None
         self.threshold = shield.threshold
         stems = {}
         for plan in plans:
@@ -302,7 +304,7 @@ class RunOutput:
                 report = result.observation.report
                 moved = result.ego_speed * (result.timestamp - scene.time[-1]) if scene.earlier else 0.0
                 before, scene.earlier = shift_earlier(scene.earlier, report, moved)
-                emerged = unseen_emerged(report, before, self.retriever)
+                emerged = unseen_emerged(report, before, self.retriever) if self.measure_emerged else None
                 decision = scene.shield.update(report.risk, speed=result.ego_speed, unseen=report.unseen,
                                                time=result.timestamp, emerged=emerged, walkers=result.walkers,
                                                contact=report.unseen_contact)

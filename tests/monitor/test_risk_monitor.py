@@ -499,20 +499,25 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_
     assert blind.road_depth is None and np.isnan(emerging_monitor.emerged(missed, [(blind, 0.5)])).all()
     # a frame without a view has no unseen objects to measure: None, as its unseen
     assert emerging_monitor.emerged(blind, [(missed, 0.5)]) is None
-    # not measured: a monitor whose shield does not ask keeps no blocks (its risk and unseen
-    # objects the same), and the paper's view has none
+    # not given: a monitor whose shield does not ask keeps no blocks (its risk and unseen
+    # objects the same), which a shield that asks refuses
     plain = geometric_monitor.step(scene_depth, none)
     assert plain.road_depth is None and plain.unseen_points == ()
     assert (plain.risk, plain.unseen.tolist()) == (missed.risk, missed.unseen.tolist())
     assert geometric_monitor.emerged(plain, [(geometric_monitor.step(_depth(none), none), 0.5)]) is None
+    # not measured: the paper's view does not see the road, NaN per unseen object
     paper = monitor.step(scene_depth, none)
-    assert monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)]) is None
-    # a report without blocks cannot be measured with a view's retriever
+    assert len(paper.unseen) > 0 and paper.road_depth is None
+    shares = monitor.emerged(paper, [(monitor.step(scene_depth, none), 0.5)])
+    assert shares.shape == (len(paper.unseen),) and np.isnan(shares).all()
+    assert np.isnan(unseen_emerged(paper, [], None)).all()
+    # a report without blocks cannot be measured with a view's retriever, and the geometric
+    # view's road is not dropped for a missing retriever
     with pytest.raises(ValueError, match="report has 1 unseen objects and the blocks of 0: its monitor keeps"):
         unseen_emerged(plain, [(road, 0.5)], GeometricRetriever(CAMERA))
-    with pytest.raises(ValueError, match="shield.confirm_emerged = 0.5 needs retrieval.method geometric, "
-                                         "not 'paper'"):
-        MonitorConfig(retrieval=RetrievalConfig(method="paper"), shield=ShieldConfig(confirm_emerged=0.5))
+    with pytest.raises(ValueError, match=r"report carries the geometric view's road \(road_depth\): its "
+                                         "emerged shares need that view's retriever, not None"):
+        unseen_emerged(missed, [(road, 0.5)], None)
     with pytest.raises(ValueError, match=r"earlier\[0\] is a RiskReport, expected a \(RiskReport, travel"):
         emerging_monitor.emerged(missed, [road])
     with pytest.raises(ValueError, match="report is a dict, expected a RiskReport"):

@@ -365,7 +365,8 @@ def test_what_came_out_of_the_road_is_confirmed_first():
         Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, emerged=[0.5, 0.5])
     with pytest.raises(ValueError, match=r"emerged = \[1.5\]"):
         Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, emerged=[1.5])
-    # not measured (a monitor whose config does not ask) is refused where there is a view
+    # not given (a geometric view whose config does not ask) is refused where there is a view;
+    # the paper's view gives NaN (not measured, above)
     with pytest.raises(ValueError, match=r"emerged = None: a shield that confirms what came out of the road "
                                          r"\(confirm_emerged = 0.5\) needs a share per unseen object"):
         Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0)

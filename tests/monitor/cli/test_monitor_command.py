@@ -124,6 +124,22 @@ def test_a_shield_that_confirms_what_came_out_of_the_road_gets_it_per_frame(reco
     assert any(e is not None for r in rows[1:] for e in r["emerged"])
 
 
+def test_the_paper_s_view_gives_a_shield_that_confirms_what_came_out_of_the_road_nothing_measured(
+        recording, tmp_path):
+    # the paper's view does not see the road: every unseen object's share is not measured
+    # (null, NaN to the shield), so not asked, and the run replays the monitor and shield
+    _, frames, prior = recording
+    config = tmp_path / "config.yaml"
+    config.write_text("retrieval:\n  method: paper\nshield:\n  confirm_emerged: 0.5\n")
+    assert main(_argv(recording, tmp_path / "out", "--config", str(config))) == 0
+    rows = read_rows(tmp_path / "out")["drive-a.jsonl"]
+    for row, (report, emerged, decision) in zip(rows, _replayed(frames, prior, load_config(config)), strict=True):
+        assert row["unseen"] == report.unseen.tolist() and np.isnan(emerged).all()
+        assert row["emerged"] == [None] * len(report.unseen)
+        assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
+    assert any(row["unseen"] for row in rows)
+
+
 def test_the_shipped_shield_gets_the_detector_s_walkers_per_frame(recording, serial_run):
     # it watches walkers (walker_horizon), so each line stores the frame's, and the reference
     # loop (_replayed) that gives the decisions of the test above is given them
