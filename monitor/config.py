@@ -243,7 +243,8 @@ class ShieldConfig:
         (:meth:`monitor.RiskMonitor.emerged`, the geometric view's rule 9) counts only once
         confirmed, wherever it stands. Something standing on the road was in view a frame
         before (or hidden, or beside its place); a patch of road the depth reads too near
-        comes out of the road. None: not asked. The paper's view does not see the road: its
+        comes out of the road. 0.8 by default (``docs/closed-loop.md``, seventeenth entry of
+        29 November 2026); None: not asked. The paper's view does not see the road: its
         objects are not measured (NaN), and what is not measured is not asked. The geometric
         view keeps each frame's blocks for it only when it is set.
     confirm_contact : float in [0, 1] or None
@@ -295,7 +296,7 @@ class ShieldConfig:
     emergency: float | None = 6.0
     confirm_near: float | None = 2.5
     confirm_edge: float | None = None
-    confirm_emerged: float | None = None
+    confirm_emerged: float | None = 0.8
     confirm_contact: float | None = 0.5
     memory: float | None = 1.0
     walker_horizon: float | None = 1.0

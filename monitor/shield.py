@@ -61,15 +61,16 @@ the two frames before showed beside it, no detection covering it, is confirmed a
 detection covered there waits a frame). A walker stepping into the path reaches its edge
 first, so the option is off by default (docs/closed-loop.md).
 
-With ``confirm_emerged`` an object that came out of the road must be confirmed too,
-wherever it stands: one of which that share of the blocks stood where each of the last two
-frames saw through to the road beyond (``emerged``, :meth:`monitor.RiskMonitor.emerged`,
-the ego's travel since allowed for). A thing standing on the road was in the frames
-before, where it stood then, or hidden behind something, or beside its place (a pedestrian
-stepping out, a car cutting in); a patch of road the depth reads too near stood where they
-saw the road farther on. Such a patch, wide and within the emergency reach, is what the
-at-once rule brakes hardest for; an obstacle that the network blended into the road in
-both frames before is confirmed when it is seen again.
+With ``confirm_emerged`` (0.8 by default) an object that came out of the road must be
+confirmed too, wherever it stands: one of which that share of the blocks stood where each of
+the last two frames saw through to the road beyond (``emerged``,
+:meth:`monitor.RiskMonitor.emerged`, the ego's travel since allowed for; the paper's view
+does not see the road, and what it does not measure is not asked). A thing standing on the
+road was in the frames before, where it stood then, or hidden behind something, or beside
+its place (a pedestrian stepping out, a car cutting in); a patch of road the depth reads too
+near stood where they saw the road farther on. Such a patch, wide and within the emergency
+reach, is what the at-once rule brakes hardest for; an obstacle that the network blended
+into the road in both frames before is confirmed when it is seen again.
 
 With ``confirm_contact`` (0.5 by default) an object that touches nothing must be confirmed
 too, wherever it stands: one that stands on the road, or on something in front of it, in

@@ -20,7 +20,7 @@ gives the same results.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Iterator
 
@@ -285,8 +285,12 @@ def observe_plans(spec: RunSpec, plans: list[ScenePlan], *, workers: int = 1, ra
     """The observations of every frame of ``plans`` in order (``fuzzrisk eval`` and ``features``).
 
     A frame that cannot be processed is an error (ValueError with its message) here:
-    evaluations need every frame. ``progress`` is called once per frame.
+    evaluations need every frame. ``progress`` is called once per frame. No shield runs here,
+    so the workers' views keep no blocks for one (``shield.confirm_emerged``; the reports'
+    risks are the same, their ``unseen_points`` empty and ``road_depth`` None).
     """
+    shield = replace(spec.config.shield, confirm_emerged=None)
+    spec = replace(spec, config=replace(spec.config, shield=shield))
     out = []
     chunks = [chunk for plan in plans for chunk in plan.chunks()]
     for results in process_chunks(spec, chunks, workers=workers, ray=ray):

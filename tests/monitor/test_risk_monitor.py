@@ -462,7 +462,7 @@ def test_unseen_contact_is_the_views_contact_of_the_objects_no_detection_covers(
 
 
 def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_monitor, geometric_monitor,
-                                                                       monitor, scene_depth):
+                                                                       monitor, scene_depth, fis, prior):
     none = np.zeros((0, 7))
     missed = emerging_monitor.step(scene_depth, none)
     road = emerging_monitor.step(_depth(none), none)
@@ -499,12 +499,17 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_
     assert blind.road_depth is None and np.isnan(emerging_monitor.emerged(missed, [(blind, 0.5)])).all()
     # a frame without a view has no unseen objects to measure: None, as its unseen
     assert emerging_monitor.emerged(blind, [(missed, 0.5)]) is None
+    # the shipped config asks it
+    shipped = geometric_monitor.step(scene_depth, none)
+    assert geometric_monitor.emerged(shipped, [(road, 0.5)])[0] == pytest.approx(road_share, abs=0.05)
     # not given: a monitor whose shield does not ask keeps no blocks (its risk and unseen
     # objects the same), which a shield that asks refuses
-    plain = geometric_monitor.step(scene_depth, none)
+    config = replace(geometric_monitor.config, shield=ShieldConfig(confirm_emerged=None))
+    blockless = RiskMonitor(fis, prior, CAMERA, config)
+    plain = blockless.step(scene_depth, none)
     assert plain.road_depth is None and plain.unseen_points == ()
     assert (plain.risk, plain.unseen.tolist()) == (missed.risk, missed.unseen.tolist())
-    assert geometric_monitor.emerged(plain, [(geometric_monitor.step(_depth(none), none), 0.5)]) is None
+    assert blockless.emerged(plain, [(blockless.step(_depth(none), none), 0.5)]) is None
     # not measured: the paper's view does not see the road, NaN per unseen object
     paper = monitor.step(scene_depth, none)
     assert len(paper.unseen) > 0 and paper.road_depth is None

@@ -147,8 +147,9 @@ def test_consistent_allows_the_ego_travel_the_depth_error_and_the_object_motion(
 
 
 CONFIRMED = ShieldConfig(path_half_width=1.25, hold_frames=3, confirm_frames=2, confirm_window=3,
-                         confirm_width=0.3, emergency=None, confirm_near=None, confirm_contact=None, memory=None,
-                         walker_horizon=None)  # one stage, no near zone, contact not asked, no memory, no walker gate
+                         confirm_width=0.3, emergency=None, confirm_near=None, confirm_emerged=None,
+                         confirm_contact=None, memory=None, walker_horizon=None)
+# one stage, no near zone, neither emergence nor contact asked, no memory, no walker gate
 
 
 def _run(config, frames, speed=10.0, dt=0.1):
@@ -218,17 +219,19 @@ def test_a_confirming_gate_needs_the_frame_times(time, message):
 def test_describe_names_the_shield():
     assert describe_shield(ShieldConfig()) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
-         "within 2.5 m of the bumper and touching the road in under 50 % of their columns: all) confirmed in "
-         "2 of 3 frames, emergency 6 m/s^2, objects remembered 1 s, walkers stepping in within 1 s (unseen "
-         "ones too: standing objects up to 1 m wide)")
+         "within 2.5 m of the bumper, 80 % out of the road and touching the road in under 50 % of their "
+         "columns: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects remembered 1 s, walkers stepping "
+         "in within 1 s (unseen ones too: standing objects up to 1 m wide)")
     assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
         "within 2.5 m of the bumper, reaching under 0.3 m into the path, 50 % out of the road and touching "
         "the road in under 40 % of their columns: all) confirmed in 2 of 3 frames")
-    assert describe_shield(ShieldConfig(emergency=None, confirm_contact=None, memory=None, walker_horizon=None)) == \
+    assert describe_shield(ShieldConfig(emergency=None, confirm_emerged=None, confirm_contact=None, memory=None,
+                                        walker_horizon=None)) == \
         ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (within 2.5 m of the "
          "bumper: all) confirmed in 2 of 3 frames")
-    one = ShieldConfig(emergency=None, confirm_near=None, confirm_contact=None, memory=None, walker_horizon=None)
+    one = ShieldConfig(emergency=None, confirm_near=None, confirm_emerged=None, confirm_contact=None, memory=None,
+                       walker_horizon=None)
     assert describe_shield(one) == \
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m confirmed in 2 of 3 frames"
     assert describe_shield(replace(PAPER, threshold=0.6, release=0.4)) == \
@@ -360,6 +363,11 @@ def test_what_came_out_of_the_road_is_confirmed_first():
     assert decelerations(asks, FLICKER, [[1.0], [1.0]]) == [0.0, 0.0]
     # not asked without the setting
     assert decelerations(replace(asks, confirm_emerged=None), WIDE[:1], [[1.0]]) == [6.0]
+    # the shipped shield asks it at 0.8 (docs/closed-loop.md, seventeenth entry): WIDE within its
+    # emergency reach, standing on the road
+    for share, cause in ((0.8, ""), (0.79, "at once"), (np.nan, "at once")):
+        assert Shield().update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, walkers=[], contact=[1.0],
+                               emerged=[share]).cause == cause
     with pytest.raises(ValueError, match=r"emerged = \[0.5, 0.5\]: expected one share in \[0, 1\] \(or NaN\) per "
                                          r"row of unseen, shape \(1,\)"):
         Shield(asks).update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, emerged=[0.5, 0.5])
@@ -394,8 +402,10 @@ def test_what_touches_nothing_is_confirmed_first():
                               ([[0.0], [1.0]], 0.0), ([[0.0], [np.nan]], 0.0), ([[1.0], [0.0]], 0.0)):
         assert decelerations(asks, narrow, contact) == [0.0, expected]
     # the shipped shield asks it (docs/closed-loop.md, sixteenth entry): WIDE within its emergency reach
-    assert Shield().update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, walkers=[], contact=[0.0]).cause == ""
-    assert Shield().update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, walkers=[], contact=[1.0]).cause == "at once"
+    assert Shield().update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, walkers=[], contact=[0.0],
+                           emerged=[np.nan]).cause == ""
+    assert Shield().update(0.9, speed=10.0, unseen=WIDE[0], time=0.0, walkers=[], contact=[1.0],
+                           emerged=[np.nan]).cause == "at once"
     # not asked without the setting, and then what floats confirms what stands
     assert decelerations(replace(asks, confirm_contact=None), WIDE[:1], [[0.0]]) == [6.0]
     assert decelerations(replace(asks, confirm_contact=None), narrow, [[0.0], [1.0]]) == [0.0, 6.0]

@@ -9,7 +9,9 @@ import fuzzcore
 import monitor.cli.monitor as monitor_command
 from monitor.cli import main
 from monitor.config import ShieldConfig, load_config
+from monitor.datasets.recordings import RecordingReader
 from monitor.depth.prior import load_prior
+from monitor.offline.run import RunSpec, ScenePlan, observe_plans
 from monitor.risk_monitor import RiskMonitor
 from monitor.shield import Shield
 from monitor.shipped import shipped_rules
@@ -84,8 +86,8 @@ def test_reports_are_the_monitor_and_shield_run_frame_by_frame(recording, serial
     assert [r["frame"] for r in rows] == list(range(N_FRAMES))
     for frame, row, (report, emerged, decision) in zip(frames, rows, _replayed(frames, prior, load_config()),
                                                        strict=True):
-        # the shipped shield does not confirm what came out of the road: nothing measured
-        assert emerged is None and row["emerged"] is None
+        # the shipped shield confirms what came out of the road: a share per unseen object
+        assert row["emerged"] == (None if emerged is None else [None if np.isnan(e) else e for e in emerged.tolist()])
         assert (row["risk"], row["status"], row["time"], row["ego_speed"], row["key"]) == (
             report.risk, report.status, frame.timestamp, frame.ego_speed, f"{frame.index:06d}")
         assert row["S"] == report.S.tolist() and row["P"] == report.P.tolist()
@@ -138,6 +140,22 @@ def test_the_paper_s_view_gives_a_shield_that_confirms_what_came_out_of_the_road
         assert row["emerged"] == [None] * len(report.unseen)
         assert row["shield"] == {"engaged": decision.engaged, "deceleration": decision.deceleration}
     assert any(row["unseen"] for row in rows)
+
+
+def test_evaluations_run_no_shield_so_their_views_keep_no_blocks(recording):
+    # observe_plans (fuzzrisk eval, features): the shipped config confirms what came out of
+    # the road, but no shield runs there; the reports are the monitor's but for the blocks
+    root, frames, prior = recording
+    config = load_config()
+    assert config.shield.confirm_emerged is not None
+    spec = RunSpec(shipped_rules(), load_prior(prior), frames[0].camera, config)
+    plan = ScenePlan.of_records("drive-a", "nominal", RecordingReader(root / "drive-a").records())
+    observed = observe_plans(spec, [plan])
+    for (report, _, _), observation in zip(_replayed(frames, prior, config), observed, strict=True):
+        assert report.road_depth is not None and observation.report.road_depth is None
+        assert observation.report.unseen_points == () and len(report.unseen_points) == len(report.unseen)
+        assert observation.report.risk == report.risk
+        assert observation.report.unseen.tolist() == report.unseen.tolist()
 
 
 def test_the_shipped_shield_gets_the_detector_s_walkers_per_frame(recording, serial_run):

@@ -28,7 +28,7 @@ def test_simulate_smoke(tmp_path, capsys):
     for name in OUTPUTS + SWEEP_OUTPUTS:
         assert (out / name).stat().st_size > 0, name
     runs = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
-    shield = "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 k0.5 e6 m1 w1 u1"
+    shield = "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1 w1 u1"
     # per scenario the baseline, the shield and the shield switched on at the hazard's onset
     assert [(r["condition"], r["seed"], r["driver"]) for r in runs] == [
         (condition, seed, driver) for condition, seed in (("nominal", 0), ("snow", 1))

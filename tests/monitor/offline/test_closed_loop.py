@@ -75,11 +75,11 @@ def test_stopping_distance_by_hand():
 
 def test_driver_label_names_each_setting():
     assert driver_label(None) == BASELINE
-    assert driver_label(ShieldConfig()) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 k0.5 e6 m1 w1 u1"
-    assert driver_label(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.8, confirm_contact=0.4)) == \
-        "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 g0.3 o0.8 k0.4 e6 m1 w1 u1"
-    assert driver_label(ShieldConfig(walker_horizon=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 k0.5 e6 m1"
-    assert driver_label(ShieldConfig(unseen_walkers=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 k0.5 e6 m1 w1"
+    assert driver_label(ShieldConfig()) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1 w1 u1"
+    assert driver_label(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)) == \
+        "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 g0.3 o0.5 k0.4 e6 m1 w1 u1"
+    assert driver_label(ShieldConfig(walker_horizon=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1"
+    assert driver_label(ShieldConfig(unseen_walkers=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1 w1"
     assert driver_label(ShieldConfig(threshold=0.5, release=0.4, hold_frames=0, path_half_width=None,
                                      walker_horizon=None)) == \
         "t0.50 r0.40 h0"
@@ -351,7 +351,7 @@ def test_the_path_gated_shield_stops_for_the_unseen_obstacle_and_not_for_unseen_
     spec = ScenarioSpec("rare-object", "nominal", _rare_seed("parking"))
     base, shielded = run_scenario(spec, perception, monitor, [gated], condition=BLIND)
     assert base.collided and not shielded.collided and shielded.engaged_frames > 0
-    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 k0.5 e6 m1")
+    assert shielded.driver.endswith(" p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1")
     # each engagement says why: the first for an unseen object in the path, where the
     # obstacle stood then (the frame's hazard gap is measured from the ego's front, x from
     # its origin 3.8 m behind); the baseline has none
