@@ -6,8 +6,8 @@ over the pixels into 4 x 4 blocks, the rest on the 400 x 225 blocks) and the pap
 same synthetic frame (nominal, seed 0, frame 3; the paper's prior from 10 frames of seed
 1000, as in ``bench_retrieval.py``), the geometric view with the blocks that rule 9 needs
 (as the monitor runs it for the shipped shield) and without them (for evaluations, and a
-shield that does not confirm what came out of the road), and the view's one
-full-resolution pass alone. Before timing, the geometric view's answer is checked: a fitted road plane
+shield that does not confirm what came out of the road), and the view's one full-resolution
+pass alone. Before timing, the geometric view's answer is checked: a fitted road plane
 within 2 cm and 0.2 degrees of the true ``z = 0`` (the frame's depth is an estimate with a
 scale error, so the plane is checked on the true depth), and every object of the frame's
 ground truth in the corridor within 20 m is found at IoU >= 0.5. Target: <= 3 ms per frame.
