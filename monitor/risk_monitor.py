@@ -334,6 +334,7 @@ class RiskMonitor:
         """
         if isinstance(self._retriever, GeometricRetriever):
             if not self._retriever.keep_blocks:
+                _check_reports(report, earlier)
                 return None
             return unseen_emerged(report, earlier, self._retriever)
         return unseen_emerged(report, earlier, None)
@@ -496,18 +497,24 @@ def shift_earlier(earlier, report: RiskReport, moved: float) -> tuple[list, list
     return before, [(report, 0.0), *before][:EMERGED_FRAMES]
 
 
-def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
-    """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever``, for code that
-    has the reports but not the monitor (the dataset run's output, which replays the shield
-    in frame order). ``retriever`` None: the reports are the paper's view's, which does not
-    see the road: NaN per unseen object (not measured); a report that carries the geometric
-    view's road (``road_depth``) is refused then."""
+def _check_reports(report, earlier) -> None:
+    """Refuse a ``report`` that is not a RiskReport and ``earlier`` that is not a sequence of
+    (RiskReport, travel) pairs (:meth:`RiskMonitor.emerged`'s arguments)."""
     if not isinstance(report, RiskReport):
         raise ValueError(f"report is a {type(report).__name__}, expected a RiskReport")
     for k, pair in enumerate(earlier):
         if not (isinstance(pair, tuple) and len(pair) == 2 and isinstance(pair[0], RiskReport)):
             raise ValueError(f"earlier[{k}] is a {type(pair).__name__}, expected a (RiskReport, travel in "
                              "metres) pair")
+
+
+def unseen_emerged(report: RiskReport, earlier, retriever: GeometricRetriever | None) -> np.ndarray | None:
+    """:meth:`RiskMonitor.emerged` with the geometric view's ``retriever``, for code that
+    has the reports but not the monitor (the dataset run's output, which replays the shield
+    in frame order). ``retriever`` None: the reports are the paper's view's, which does not
+    see the road: NaN per unseen object (not measured); a report that carries the geometric
+    view's road (``road_depth``) is refused then."""
+    _check_reports(report, earlier)
     if report.unseen is None:
         return None
     if retriever is None:

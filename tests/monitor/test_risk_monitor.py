@@ -510,6 +510,8 @@ def test_emerged_measures_each_unseen_object_against_the_frames_before(emerging_
     assert plain.road_depth is None and plain.unseen_points == ()
     assert (plain.risk, plain.unseen.tolist()) == (missed.risk, missed.unseen.tolist())
     assert blockless.emerged(plain, [(blockless.step(_depth(none), none), 0.5)]) is None
+    with pytest.raises(ValueError, match=r"earlier\[0\] is a RiskReport, expected a \(RiskReport, travel"):
+        blockless.emerged(plain, [plain])
     # not measured: the paper's view does not see the road, NaN per unseen object
     paper = monitor.step(scene_depth, none)
     assert len(paper.unseen) > 0 and paper.road_depth is None
