@@ -49,7 +49,12 @@ obstacle from a patch of road read too near (two thirds of the objects the shiel
 for in hazard-free drives stood there; docs/closed-loop.md). A standing obstacle that near
 was in view a frame before, and one stepping in from the side was seen beside the path, so
 confirming costs it at most a frame, at a distance where braking at once rarely stops the
-car anyway.
+car anyway. With ``confirm_near_all`` (an option, off) an object there that floats (below,
+``confirm_contact``) must have floated there in every frame of the window, not
+``confirm_frames`` of them: the blobs of the depth in the image's bottom rows (flakes in
+snow, the grain of a noisy image) float, each in a new place, and one floats where one of
+the two frames before had another by chance far more often than in both. A walker or an
+obstacle standing there stands on the road, and is confirmed as before.
 
 With ``confirm_edge`` an object that reaches only a little into the path must be confirmed
 too, whatever its width. The path's half width adds a margin to the car's for the errors of
@@ -195,6 +200,10 @@ def describe_shield(config: ShieldConfig) -> str:
                 listed = zones[0] if len(zones) == 1 else f"{', '.join(zones[:-1])} and {zones[-1]}"
                 which += f" ({listed}: all)"
         parts.append(f"{which} confirmed in {config.confirm_frames} of {config.confirm_window} frames")
+        if config.confirm_near is not None and config.confirm_near_all and config.confirm_contact is not None \
+                and config.confirm_window > config.confirm_frames:
+            parts[-1] += (f" (what floats within {config.confirm_near:g} m of the bumper: in all "
+                          f"{config.confirm_window})")
     if config.path_half_width is not None and config.emergency is not None:
         parts.append(f"emergency {config.emergency:g} m/s^2")
     if config.path_half_width is not None and config.memory is not None:
@@ -420,7 +429,10 @@ class Shield:
                     dt = time - t
                     hits[afloat] += consistent(near[afloat], then[then_afloat], dt, speed)
                     hits[~afloat] += consistent(near[~afloat], then[~then_afloat], dt, speed)
-                unconfirmed &= hits < c.confirm_frames - 1
+                need = np.full(near.shape[0], c.confirm_frames - 1)
+                if c.confirm_near is not None and c.confirm_near_all:
+                    need[(near[:, 0] - c.front < c.confirm_near) & afloat] = c.confirm_window - 1
+                unconfirmed &= hits < need
             counts = ~unconfirmed
             if c.memory is not None:
                 self._renew(unseen, time)

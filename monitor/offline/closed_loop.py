@@ -299,7 +299,8 @@ def driver_label(config: ShieldConfig | None) -> str:
     """``baseline`` or ``t{threshold} r{release} h{hold_frames}``, with `` p{path_half_width}``
     for a path-gated shield and `` c{confirm_frames}/{confirm_window}`` for one that confirms,
     followed by ``<{confirm_width}`` when only objects under that width are confirmed (and
-    `` n{confirm_near}`` when every object near the bumper is, `` g{confirm_edge}`` when every
+    `` n{confirm_near}`` when every object near the bumper is, ``/{confirm_window}`` after it
+    when what floats there is in every frame of the window, `` g{confirm_edge}`` when every
     edge of the path is, `` o{confirm_emerged}`` when every object out of the road is,
     `` k{confirm_contact}`` when every object that touches the road too little is),
     `` e{emergency}`` for a gate with an emergency stage, `` m{memory}`` for one that
@@ -314,6 +315,9 @@ def driver_label(config: ShieldConfig | None) -> str:
             gate += f"<{config.confirm_width:.2f}"
             if config.confirm_near is not None:
                 gate += f" n{config.confirm_near:g}"
+                if config.confirm_near_all and config.confirm_contact is not None \
+                        and config.confirm_window > config.confirm_frames:
+                    gate += f"/{config.confirm_window}"
             if config.confirm_edge is not None:
                 gate += f" g{config.confirm_edge:g}"
             if config.confirm_emerged is not None:

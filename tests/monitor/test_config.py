@@ -44,13 +44,14 @@ def test_the_sections_mirror_the_shipped_file():
 
 
 def test_user_file_overrides_only_what_it_names(tmp_path):
-    config = load_config(_write(tmp_path, "alignment: {alpha: 0.5}\nshield: {threshold: 0.6, release: 0.4}\n"
+    config = load_config(_write(tmp_path, "alignment: {alpha: 0.5}\n"
+                                          "shield: {threshold: 0.6, release: 0.4, confirm_near_all: true}\n"
                                           "max_range: 30\nrisk:\n  fail_safe: 0.9\n"
                                           "retrieval: {paper: {depth_percentile: 5}, geometric: {stride: 2}}\n"))
     assert config.alignment == AlignmentConfig(alpha=0.5, beta=1.0, weighting="mean", matching="coverage",
                                                 objects="known")
     assert config.shield == ShieldConfig(threshold=0.6, release=0.4, hold_frames=5, deceleration=3.0,
-                                         path_half_width=1.25)
+                                         path_half_width=1.25, confirm_near_all=True)
     assert config.risk == RiskConfig(fail_safe=0.9, no_objects=0.5)
     assert config.detections == DetectionsConfig()
     assert config.max_range == 30.0 and isinstance(config.max_range, float)
@@ -87,6 +88,7 @@ def test_an_empty_file_is_the_defaults(tmp_path):
     ("shield: {threshold: 0.3, release: 0.4}\n", r"shield\.release = 0\.4 must be <= threshold = 0\.3"),
     ("shield: {hold_frames: 1.5}\n", r"shield\.hold_frames = 1\.5, must be an integer"),
     ("shield: {deceleration: -1}\n", r"shield\.deceleration = -1\.0, must be > 0"),
+    ("shield: {confirm_near_all: 1}\n", r"shield\.confirm_near_all = 1, must be true or false"),
     ("risk: {fail_safe: '1.0'}\n", r"risk\.fail_safe = '1\.0', must be a number"),
     ("risk: {fail_safe: true}\n", r"risk\.fail_safe = True, must be a number"),
     ("risk: {no_objects: 1.5}\n", r"risk\.no_objects = 1\.5, must be in \[0, 1\]"),

@@ -222,6 +222,12 @@ def test_describe_names_the_shield():
          "within 2.5 m of the bumper, 80 % out of the road and touching the road in under 50 % of their "
          "columns: all) confirmed in 2 of 3 frames, emergency 6 m/s^2, objects remembered 1 s, walkers stepping "
          "in within 1 s (unseen ones too: standing objects up to 1 m wide)")
+    assert describe_shield(ShieldConfig(confirm_near_all=True)) == \
+        ("threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
+         "within 2.5 m of the bumper, 80 % out of the road and touching the road in under 50 % of their "
+         "columns: all) confirmed in 2 of 3 frames (what floats within 2.5 m of the bumper: in all 3), emergency "
+         "6 m/s^2, objects remembered 1 s, walkers stepping in within 1 s (unseen ones too: standing objects up "
+         "to 1 m wide)")
     assert describe_shield(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)).startswith(
         "threshold 0.3, path gate 1.25 m, hold 5 frames, objects under 0.3 m (beyond the emergency reach, "
         "within 2.5 m of the bumper, reaching under 0.3 m into the path, 50 % out of the road and touching "
@@ -306,6 +312,36 @@ def test_near_the_bumper_every_object_is_confirmed_first():
         ShieldConfig(confirm_near=-1.0)
     with pytest.raises(ValueError, match="confirm_near = 'close', must be a number"):
         ShieldConfig(confirm_near="close")
+
+
+def test_near_the_bumper_what_floats_is_confirmed_in_every_frame_of_the_window():
+    every = replace(STAGED, confirm_near=2.5, confirm_contact=0.5, confirm_near_all=True)
+    two_of_three = replace(every, confirm_near_all=False)
+    none = np.zeros((0, 3))
+
+    def decisions(config, frames, contact):
+        shield = Shield(config)
+        return [shield.update(0.9, speed=4.0, unseen=u, time=0.1 * k, contact=[contact] * len(u)).deceleration
+                for k, u in enumerate(frames)]
+
+    # at 4 m/s (0.4 m a frame): a wide object 1.4 m ahead of the bumper, then 1.0 m and 0.6 m,
+    # where a standing one stands (within the emergency reach, 5.33 m). One that floats (contact
+    # 0.2) counts in the third frame, at 6 m/s^2, not in the second as with 2 of 3 frames
+    wide = [np.array([[3.8 + d, -0.5, 0.5]]) for d in (1.4, 1.0, 0.6)]
+    assert decisions(every, wide, 0.2) == [0.0, 0.0, 6.0]
+    assert decisions(two_of_three, wide, 0.2) == [0.0, 6.0, 6.0]
+    # one frame of three without it: 2 of 3 counts it, every frame does not
+    gap = [wide[0], none, wide[2]]
+    assert decisions(every, gap, 0.2) == [0.0, 0.0, 0.0]
+    assert decisions(two_of_three, gap, 0.2) == [0.0, 0.0, 6.0]
+    # one that stands on the road (contact 1.0) is confirmed in 2 of 3 frames either way
+    assert decisions(every, wide, 1.0) == decisions(two_of_three, wide, 1.0) == [0.0, 6.0, 6.0]
+    assert decisions(every, gap, 1.0) == [0.0, 0.0, 6.0]
+    # beyond the zone (3 m ahead) one that floats is confirmed in 2 of 3 frames
+    beyond = [np.array([[3.8 + d, -0.5, 0.5]]) for d in (3.4, 3.0)]
+    assert decisions(every, beyond, 0.2) == [0.0, 6.0]
+    with pytest.raises(ValueError, match="confirm_near_all = 'yes', must be true or false"):
+        ShieldConfig(confirm_near_all="yes")
 
 
 def test_an_edge_of_the_path_is_confirmed_first():

@@ -79,6 +79,10 @@ def test_driver_label_names_each_setting():
     assert driver_label(ShieldConfig(confirm_edge=0.3, confirm_emerged=0.5, confirm_contact=0.4)) == \
         "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 g0.3 o0.5 k0.4 e6 m1 w1 u1"
     assert driver_label(ShieldConfig(walker_horizon=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1"
+    assert driver_label(ShieldConfig(confirm_near_all=True)) == \
+        "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5/3 o0.8 k0.5 e6 m1 w1 u1"
+    assert driver_label(ShieldConfig(confirm_near_all=True, confirm_contact=None)) == \
+        "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 e6 m1 w1 u1"
     assert driver_label(ShieldConfig(unseen_walkers=None)) == "t0.30 r0.30 h5 p1.25 c2/3<0.30 n2.5 o0.8 k0.5 e6 m1 w1"
     assert driver_label(ShieldConfig(threshold=0.5, release=0.4, hold_frames=0, path_half_width=None,
                                      walker_horizon=None)) == \
